@@ -1,0 +1,67 @@
+/// @file Cli.h
+/// @brief The vdb_match command line: option table, parsing, help, and the subcommands.
+///
+/// Usage: `vdb_match COMMAND [options] ARGS...`, `vdb_match --help`, `vdb_match --version`.
+/// Commands: `energy SOURCE.vdb TARGET.vdb` (energy of phi = Id). Results go to the output
+/// stream, progress and errors to the error stream (errors as one line
+/// `vdb_match: error: ...`). See docs/cli.md.
+#pragma once
+
+#include <vdbmatch/Parameters.h>
+#include <vdbmatch/geometry/UnitBox.h>
+
+#include <iosfwd>
+#include <stdexcept>
+#include <string>
+
+namespace vdbmatch {
+namespace cli {
+
+/// Process exit codes, documented in --help and docs/cli.md.
+enum ExitCode : int {
+    EXIT_OK = 0,
+    EXIT_USAGE = 1,         ///< unknown option, missing argument, bad number, contradiction
+    EXIT_IO = 2,            ///< missing or unreadable file
+    EXIT_INVALID_INPUT = 3, ///< not a level set, ambiguous grid, NaN, empty, out-of-range values
+    EXIT_NOT_CONVERGED = 4, ///< reserved for `match --strict`
+    EXIT_INTERRUPTED = 5    ///< SIGINT or SIGTERM
+};
+
+/// A command-line error (exit code EXIT_USAGE).
+class UsageError : public std::runtime_error
+{
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Options of the `energy` command, with their defaults.
+struct EnergyOptions
+{
+    std::string source, target; ///< input files
+    std::string grid;           ///< --grid: grid name in both files
+    std::string sourceGrid;     ///< --source-grid
+    std::string targetGrid;     ///< --target-grid
+    int level = 6;              ///< lattice level, h = 2^-level
+    double margin = DEFAULT_UNIT_BOX_MARGIN;
+    EnergyKind kind = EnergyKind::Symmetric;
+    EnergyParameters params = EnergyParameters::defaults(3);
+    int hessianSmoothing = 0; ///< ShapeFieldOptions::hessianSmoothing
+    int threads = 0;          ///< 0: all cores
+    bool json = false;
+    bool quiet = false;
+};
+
+/// Parses the arguments that follow `energy` (argv[first..argc)).
+/// @throw UsageError on an unknown option, a missing value or argument, a malformed number, or
+/// contradictory options. Range checks are left to the library (exit code EXIT_INVALID_INPUT).
+EnergyOptions parseEnergyOptions(int argc, const char* const* argv, int first);
+
+/// The full help text (usage, commands, grouped options with defaults, exit codes).
+std::string helpText();
+
+/// Runs the command line and returns the exit code. Writes results to @a out and progress and
+/// errors to @a err. Installs SIGINT/SIGTERM handlers for the duration of a command.
+int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+
+} // namespace cli
+} // namespace vdbmatch

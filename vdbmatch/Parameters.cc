@@ -1,0 +1,75 @@
+/// @file Parameters.cc
+#include "Parameters.h"
+
+#include <openvdb/Exceptions.h>
+
+#include <cmath>
+#include <sstream>
+
+namespace vdbmatch {
+
+std::string
+toString(EnergyKind kind)
+{
+    return kind == EnergyKind::Symmetric ? "symmetric" : "directional";
+}
+
+EnergyKind
+parseEnergyKind(const std::string& name)
+{
+    if (name == "symmetric") return EnergyKind::Symmetric;
+    if (name == "directional") return EnergyKind::Directional;
+    OPENVDB_THROW(openvdb::ValueError,
+                  "parseEnergyKind: expected \"symmetric\" or \"directional\", got \"" << name
+                                                                                       << "\"");
+}
+
+EnergyParameters
+EnergyParameters::defaults(int dim)
+{
+    EnergyParameters p;
+    if (dim == 2) { // tab:parameters, Jump
+        p.cMatch = 0.512;
+        p.cVol = 0.8;
+        p.cMem = 1.0;
+        p.cBend = 1.0;
+        p.q = 3.0;
+        p.theta = 1.0;
+    } else if (dim == 3) { // tab:parameters, Dolphin and Starfish
+        p.cMatch = 4.096;
+        p.cVol = 0.8;
+        p.cMem = 1.0;
+        p.cBend = 0.2;
+        p.q = 4.0;
+        p.theta = 1.0;
+    } else {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "EnergyParameters::defaults: dimension must be 2 or 3, got " << dim);
+    }
+    return p;
+}
+
+void
+EnergyParameters::validate() const
+{
+    auto nonNegative = [](const char* name, Real v) {
+        if (!std::isfinite(v) || v < 0)
+            OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: " << name
+                                                                    << " must be finite and >= 0, got "
+                                                                    << v);
+    };
+    nonNegative("c_match", cMatch);
+    nonNegative("c_mem", cMem);
+    nonNegative("c_bend", cBend);
+    nonNegative("c_vol", cVol);
+    if (!std::isfinite(q)) OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: q must be finite");
+    if (!std::isfinite(theta))
+        OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: theta must be finite");
+    if (!std::isfinite(tau) || tau <= 0)
+        OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: tau must be finite and > 0, got " << tau);
+    if (!std::isfinite(sigmaFactor) || sigmaFactor <= 0)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "EnergyParameters: sigma factor must be finite and > 0, got " << sigmaFactor);
+}
+
+} // namespace vdbmatch

@@ -1,0 +1,48 @@
+/// @file Parameters.h
+/// @brief Coefficients of the matching energy, paper tab:parameters, and their validation.
+///
+/// The energy at level l uses h = 2^{-l}, sigma = 2h (tab:parameters: sigma = 2^{-l+1}),
+/// E = c_match E_match + c_mem E_mem + c_bend E_bend + c_vol E_vol with the volume term scaled by
+/// sigma^theta (eq:EsymVol) and the matching term by sigma^{-q} (eq:EsymMatch).
+/// @see paper tab:parameters, eq:Esym, eq:Ecomparison
+#pragma once
+
+#include <vdbmatch/Types.h>
+
+#include <string>
+
+namespace vdbmatch {
+
+/// Which functional is minimised: the symmetric E^sigma of eq:Esym or the directional
+/// comparison energy of eq:Ecomparison (direct halves only, with W_vol).
+enum class EnergyKind { Symmetric, Directional };
+
+/// "symmetric" / "directional".
+std::string toString(EnergyKind kind);
+/// Parses "symmetric" or "directional"; throws openvdb::ValueError otherwise.
+EnergyKind parseEnergyKind(const std::string& name);
+
+struct EnergyParameters
+{
+    Real cMatch = 4.096; ///< c_match
+    Real cMem = 1.0;     ///< c_mem
+    Real cBend = 0.2;    ///< c_bend
+    Real cVol = 0.8;     ///< c_vol
+    Real q = 4.0;        ///< matching exponent: weight sigma^{-q} (eq:EsymMatch)
+    Real theta = 1.0;    ///< volume exponent: weight sigma^theta (eq:EsymVol), paper uses 0 or 1
+    /// Eigenvalue floor of the regularised shape operator S = R(D^2 d + n (x) n), eq:defSi, in
+    /// 1/Omega-units. Not listed in tab:parameters; 1 means curvature radii larger than the unit
+    /// box are treated alike (flat).
+    Real tau = 1.0;
+    /// Band half-width as a multiple of h: sigma = sigmaFactor * h (tab:parameters: 2).
+    Real sigmaFactor = 2.0;
+
+    /// The defaults of tab:parameters for dimension 2 (Jump example) or 3 (Dolphin, Starfish).
+    static EnergyParameters defaults(int dim);
+
+    /// Throws openvdb::ValueError naming the first invalid field: coefficients must be finite
+    /// and >= 0, q finite, theta finite, tau > 0, sigmaFactor > 0.
+    void validate() const;
+};
+
+} // namespace vdbmatch

@@ -1,0 +1,271 @@
+/// @file Energy.cc
+#include "Energy.h"
+
+#include <vdbmatch/energy/BendingTerm.h>
+#include <vdbmatch/energy/MatchTerm.h>
+#include <vdbmatch/energy/MembraneTerm.h>
+#include <vdbmatch/energy/VolumeTerm.h>
+#include <vdbmatch/geometry/BandWeight.h>
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/thread/Threading.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <vector>
+
+namespace vdbmatch {
+
+Real
+EnergyTerms::total() const
+{
+    if (invertedSimplices > 0) return INF;
+    return match[0] + match[1] + mem[0] + mem[1] + bend[0] + bend[1] + vol[0] + vol[1];
+}
+
+EnergyTerms&
+EnergyTerms::operator+=(const EnergyTerms& o)
+{
+    for (int i = 0; i < 2; ++i) {
+        match[i] += o.match[i];
+        mem[i] += o.mem[i];
+        bend[i] += o.bend[i];
+        vol[i] += o.vol[i];
+    }
+    invertedSimplices += o.invertedSimplices;
+    bandSimplices += o.bandSimplices;
+    return *this;
+}
+
+template <int D>
+Energy<D>::Energy(const SimplexLattice<D>& lattice, const FieldSampler<D>& shape1,
+                  const FieldSampler<D>& shape2, const EnergyParameters& params, EnergyKind kind,
+                  Real sigma)
+    : mLattice(&lattice), mShape1(&shape1), mShape2(&shape2), mParams(params), mKind(kind)
+{
+    mParams.validate();
+    mSigma = sigma > 0 ? sigma : mParams.sigmaFactor * lattice.h();
+    mMatchWeight = mParams.cMatch * std::pow(mSigma, -mParams.q);
+    mVolumeWeight = mParams.cVol * std::pow(mSigma, mParams.theta);
+}
+
+namespace {
+
+[[noreturn]] void
+throwOutside(const char* which, const Real* x, int d)
+{
+    std::ostringstream os;
+    for (int a = 0; a < d; ++a) os << (a ? ", " : "") << x[a];
+    OPENVDB_THROW(openvdb::ValueError, "Energy: the fields of "
+                                           << which << " do not cover the point (" << os.str()
+                                           << "); extend the signed distance grid");
+}
+
+} // namespace
+
+template <int D>
+template <bool Grad>
+void
+Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& t,
+                         NodeVectors<D>* perSlot) const
+{
+    using namespace energy;
+    constexpr int NC = SimplexLattice<D>::CORNERS;
+    constexpr Real INV_FACTORIAL = D == 2 ? 0.5 : 1.0 / 6.0;
+    const auto& L = *mLattice;
+    const auto& block = L.blocks()[blockIndex];
+    const auto& paths = KuhnSplit<D>::path();
+    const auto& axes = KuhnSplit<D>::axis();
+    const BandWeight band(mSigma);
+    const bool symmetric = mKind == EnergyKind::Symmetric;
+    const Real h = L.h();
+
+    std::array<Vec<D>, NC> uc;
+    PointGeometry<D> g;
+    RawFields<D> raw1, raw2;
+    RawFieldDerivatives<D> deriv2;
+
+    for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
+        const auto& cell = L.cells()[ci];
+        const Real side = h * Real(1 << cell.log2Size);
+        const Real invSide = 1.0 / side;
+        const Real volume = INV_FACTORIAL * std::pow(side, D);
+        Vec<D> origin;
+        for (int a = 0; a < D; ++a) origin[a] = cell.origin[a] * h;
+        for (int k = 0; k < NC; ++k) uc[k] = u.col(cell.corners[k]);
+        const int32_t* slots = L.cellSlots().data() + ci * NC;
+
+        for (std::size_t p = 0; p < paths.size(); ++p) {
+            const auto& path = paths[p];
+            const auto& axis = axes[p];
+            // D phi: column pi(m) is (phi(v_m) - phi(v_{m-1})) / side.
+            Mat<D> A = Mat<D>::Identity();
+            Vec<D> x = Vec<D>::Zero(), ubar = Vec<D>::Zero();
+            for (int m = 0; m <= D; ++m) {
+                ubar += uc[path[m]];
+                for (int a = 0; a < D; ++a)
+                    if (path[m] & (1 << a)) x[a] += 1.0;
+                if (m > 0) A.col(axis[m]) += (uc[path[m]] - uc[path[m - 1]]) * invSide;
+            }
+            x = origin + x * (side / (D + 1));
+            const Vec<D> y = x + ubar / Real(D + 1);
+
+            const SimplexKinematics<D> k(A);
+            if (!(k.J > 0)) {
+                ++t.invertedSimplices;
+                continue;
+            }
+            DensityGradient<D> dg;
+            DensityGradient<D>* dgp = Grad ? &dg : nullptr;
+
+            if (symmetric) {
+                t.vol[0] += volume * volumeDirect<D, Grad>(k, mVolumeWeight, dgp);
+                t.vol[1] += volume * volumeInverse<D, Grad>(k, mVolumeWeight, dgp);
+            } else {
+                t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
+            }
+
+            Real d1, d2 = 0;
+            if (!mShape1->sampleDistance(x, d1)) throwOutside("shape 1", x.data(), D);
+            g.eta1 = band(d1);
+            g.eta2 = 0;
+            g.eta2Derivative = 0;
+            if (symmetric) {
+                if (!mShape2->sampleDistance(y, d2)) throwOutside("shape 2", y.data(), D);
+                g.eta2 = band(d2, g.eta2Derivative);
+            }
+            Vec<D> dy = Vec<D>::Zero();
+            if (g.eta1 > 0 || g.eta2 > 0) {
+                ++t.bandSimplices;
+                mShape1->sample(x, raw1, nullptr);
+                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
+                    throwOutside("shape 2", y.data(), D);
+                kinematics::makeFrame(raw1, g.f1);
+                kinematics::makeFrame(raw2, g.f2);
+                if (g.eta1 > 0) {
+                    t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
+                    t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);
+                    t.bend[0] += volume * bendingDirect<D, Grad>(k, g, mParams.cBend, dgp);
+                }
+                if (g.eta2 > 0) {
+                    t.match[1] += volume * matchInverse<D, Grad>(k, g, mMatchWeight, dgp);
+                    t.mem[1] += volume * membraneInverse<D, Grad>(k, g, mParams.cMem, dgp);
+                    t.bend[1] += volume * bendingInverse<D, Grad>(k, g, mParams.cBend, dgp);
+                }
+                if constexpr (Grad) dy = kinematics::frameAdjoint(raw2, deriv2, g.f2, dg.f2);
+            }
+            if constexpr (Grad) {
+                dg.finish(k);
+                // Chain rule to the simplex vertices: A.col(pi(m)) = (u_m - u_{m-1})/side,
+                // y = x + mean(u_m). Everything is multiplied by |T|.
+                auto& G = *perSlot;
+                const Vec<D> share = (volume / (D + 1)) * dy;
+                for (int m = 0; m <= D; ++m) G.col(slots[path[m]]) += share;
+                for (int m = 1; m <= D; ++m) {
+                    const Vec<D> c = (volume * invSide) * dg.dA.col(axis[m]);
+                    G.col(slots[path[m]]) += c;
+                    G.col(slots[path[m - 1]]) -= c;
+                }
+            }
+        }
+    }
+}
+
+template <int D>
+template <bool Grad>
+Real
+Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
+                    bool threaded, openvdb::util::NullInterrupter* interrupter) const
+{
+    const auto& L = *mLattice;
+    if (std::size_t(u.cols()) != L.nodeCount())
+        OPENVDB_THROW(openvdb::ValueError, "Energy: expected " << L.nodeCount()
+                                                               << " nodal displacements, got "
+                                                               << u.cols());
+    std::vector<EnergyTerms> partial(L.blocks().size());
+    NodeVectors<D> perSlot;
+    if constexpr (Grad) perSlot = NodeVectors<D>::Zero(D, L.slotNodes().size());
+    bool interrupted = false;
+    auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+        if (interrupter && interrupter->wasInterrupted()) {
+            interrupted = true;
+            openvdb::thread::cancelGroupExecution();
+            return;
+        }
+        for (std::size_t b = r.begin(); b != r.end(); ++b)
+            evaluateBlock<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr);
+    };
+    const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);
+    if (threaded) tbb::parallel_for(range, body);
+    else body(range);
+
+    EnergyTerms sum;
+    if (!interrupted)
+        for (const auto& p : partial) sum += p;
+    if (terms) *terms = sum;
+    if (interrupted) {
+        if (gradient) gradient->setZero(D, L.nodeCount());
+        return INF;
+    }
+    const Real e = sum.total();
+    if constexpr (Grad) {
+        if (std::isfinite(e)) L.gatherSlots(perSlot, *gradient, threaded);
+        else gradient->setZero(D, L.nodeCount());
+    }
+    return e;
+}
+
+template <int D>
+Real
+Energy<D>::value(const NodeVectors<D>& u, EnergyTerms* terms, bool threaded,
+                 openvdb::util::NullInterrupter* interrupter) const
+{
+    return evaluate<false>(u, nullptr, terms, threaded, interrupter);
+}
+
+template <int D>
+Real
+Energy<D>::valueAndGradient(const NodeVectors<D>& u, NodeVectors<D>& gradient, EnergyTerms* terms,
+                            bool threaded, openvdb::util::NullInterrupter* interrupter) const
+{
+    return evaluate<true>(u, &gradient, terms, threaded, interrupter);
+}
+
+template <int D>
+Real
+Energy<D>::minJacobianDeterminant(const NodeVectors<D>& u, bool threaded) const
+{
+    const auto& L = *mLattice;
+    std::vector<Real> blockMin(L.blocks().size(), INF);
+    auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+        const auto& paths = KuhnSplit<D>::path();
+        const auto& axes = KuhnSplit<D>::axis();
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            const auto& block = L.blocks()[b];
+            for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
+                const auto& cell = L.cells()[ci];
+                const Real invSide = 1.0 / (L.h() * Real(1 << cell.log2Size));
+                for (std::size_t p = 0; p < paths.size(); ++p) {
+                    Mat<D> A = Mat<D>::Identity();
+                    for (int m = 1; m <= D; ++m)
+                        A.col(axes[p][m]) += (u.col(cell.corners[paths[p][m]]) -
+                                              u.col(cell.corners[paths[p][m - 1]])) *
+                                             invSide;
+                    blockMin[b] = std::min(blockMin[b], A.determinant());
+                }
+            }
+        }
+    };
+    const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);
+    if (threaded) tbb::parallel_for(range, body);
+    else body(range);
+    Real m = INF;
+    for (Real v : blockMin) m = std::min(m, v);
+    return m;
+}
+
+template class Energy<2>;
+template class Energy<3>;
+
+} // namespace vdbmatch

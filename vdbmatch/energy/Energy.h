@@ -1,0 +1,95 @@
+/// @file Energy.h
+/// @brief The discrete matching energy on a simplex lattice: the symmetric E^sigma of eq:Esym and
+///        the directional comparison energy of eq:Ecomparison, value and exact gradient with
+///        respect to the nodal displacements, assembled in parallel over cell blocks.
+///
+/// phi = Id + u with u continuous and linear on each Kuhn simplex of the lattice. On a simplex T
+/// the deformation gradient A = D phi is constant; every term is integrated with the one-point
+/// (centroid) rule: E_T = |T| e(A, x_T, phi(x_T)) with x_T the centroid of T. This is exact for
+/// the volume terms (A constant) and second-order accurate for the band terms (docs/numerics.md).
+/// The shapes enter only through two FieldSampler objects, so that d1, n1, S1 at x_T and d2, n2,
+/// S2 at phi(x_T) (and the spatial derivatives of the latter) come from one C^1 interpolant per
+/// field: the gradient is the exact derivative of the discrete energy.
+///
+/// A simplex with det A <= 0 makes the energy +inf (the gradient is then not computed).
+/// Results do not depend on the number of threads: per-block partial sums are added in block
+/// order and the gradient is gathered per node in block order.
+/// @see paper eq:Esym, eq:EsymMatch, eq:EsymMem, eq:EsymBend, eq:EsymVol, eq:Ecomparison
+#pragma once
+
+#include <vdbmatch/Parameters.h>
+#include <vdbmatch/geometry/FieldSampler.h>
+#include <vdbmatch/lattice/SimplexLattice.h>
+
+#include <openvdb/util/NullInterrupter.h>
+
+#include <cstddef>
+
+namespace vdbmatch {
+
+/// Value of every term, split in direct (index 0, weight eta_sigma(d1)) and inverse (index 1,
+/// weight eta_sigma(d2 o phi)|det D phi|) halves, coefficients c_* included. For the directional
+/// energy the inverse halves are 0 and vol[0] holds the W_vol term.
+struct EnergyTerms
+{
+    Real match[2] = {0, 0};
+    Real mem[2] = {0, 0};
+    Real bend[2] = {0, 0};
+    Real vol[2] = {0, 0};
+    std::size_t invertedSimplices = 0; ///< simplices with det D phi <= 0 (energy +inf)
+    std::size_t bandSimplices = 0;     ///< simplices where a band term was evaluated
+
+    Real total() const;
+    EnergyTerms& operator+=(const EnergyTerms& o);
+};
+
+template <int D> class Energy
+{
+public:
+    /// @param lattice  cells and nodes; must outlive the Energy
+    /// @param shape1   fields of M1 (source), @param shape2 fields of M2 (target); must outlive it
+    /// @param params   coefficients (validated here: throws openvdb::ValueError)
+    /// @param kind     symmetric eq:Esym or directional eq:Ecomparison
+    /// @param sigma    band half-width in Omega units; <= 0 selects params.sigmaFactor * h
+    Energy(const SimplexLattice<D>& lattice, const FieldSampler<D>& shape1,
+           const FieldSampler<D>& shape2, const EnergyParameters& params, EnergyKind kind,
+           Real sigma = 0);
+
+    Real sigma() const { return mSigma; }
+    EnergyKind kind() const { return mKind; }
+    const SimplexLattice<D>& lattice() const { return *mLattice; }
+
+    /// Energy of phi = Id + u (u: one column per lattice node, Omega units). +inf if a simplex
+    /// is inverted. Throws openvdb::ValueError if a field is sampled outside its coverage.
+    /// If the interrupter asks to stop, returns NaN-free +inf and sets @a terms to 0.
+    Real value(const NodeVectors<D>& u, EnergyTerms* terms = nullptr, bool threaded = true,
+               openvdb::util::NullInterrupter* interrupter = nullptr) const;
+
+    /// Energy and its gradient with respect to every nodal displacement (Dirichlet nodes
+    /// included; the solver discards them). When the energy is +inf the gradient is left 0.
+    Real valueAndGradient(const NodeVectors<D>& u, NodeVectors<D>& gradient,
+                          EnergyTerms* terms = nullptr, bool threaded = true,
+                          openvdb::util::NullInterrupter* interrupter = nullptr) const;
+
+    /// Smallest det D phi over all simplices (may be <= 0).
+    Real minJacobianDeterminant(const NodeVectors<D>& u, bool threaded = true) const;
+
+private:
+    template <bool Grad>
+    Real evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
+                  bool threaded, openvdb::util::NullInterrupter* interrupter) const;
+    template <bool Grad>
+    void evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
+                       NodeVectors<D>* perSlot) const;
+
+    const SimplexLattice<D>* mLattice;
+    const FieldSampler<D>* mShape1;
+    const FieldSampler<D>* mShape2;
+    EnergyParameters mParams;
+    EnergyKind mKind;
+    Real mSigma;
+    Real mMatchWeight;  ///< c_match sigma^{-q}
+    Real mVolumeWeight; ///< c_vol sigma^theta
+};
+
+} // namespace vdbmatch

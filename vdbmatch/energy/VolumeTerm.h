@@ -1,0 +1,57 @@
+/// @file VolumeTerm.h
+/// @brief Volume densities: symmetric W(A) + W(cof A^T / det A)|det A| of eq:EsymVol and the
+///        comparison density W_vol(A) of eq:EcomparisonVol. The factor c_vol sigma^theta is
+///        passed in as c.
+/// @see paper eq:EsymVol, eq:EcomparisonVol
+#pragma once
+
+#include <vdbmatch/energy/SimplexState.h>
+#include <vdbmatch/math/StoredEnergy.h>
+
+namespace vdbmatch {
+namespace energy {
+
+/// Direct half of eq:EsymVol: c W(A).
+template <int D, bool Grad>
+inline Real
+volumeDirect(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
+{
+    if constexpr (Grad) {
+        Mat<D> G;
+        const Real e = math::W<D>(k.A, G);
+        grad->dA += c * G;
+        return c * e;
+    } else {
+        return c * math::W<D>(k.A, k.J);
+    }
+}
+
+/// Inverse half of eq:EsymVol: c W(B) J for J > 0, with B = A^{-1}.
+template <int D, bool Grad>
+inline Real
+volumeInverse(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
+{
+    if constexpr (Grad) {
+        Mat<D> G;
+        const Real e = math::W<D>(k.B, G);
+        grad->dB += (c * k.J) * G;
+        grad->dA += (c * e) * k.C;
+        return c * e * k.J;
+    } else {
+        return c * k.J * math::W<D>(k.B, 1.0 / k.J);
+    }
+}
+
+/// Comparison volume density of eq:EcomparisonVol: c W_vol(A).
+template <int D, bool Grad>
+inline Real
+volumeComparison(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
+{
+    Mat<D> G;
+    const Real e = math::volW<D>(k.A, G);
+    if constexpr (Grad) grad->dA += c * G;
+    return c * e;
+}
+
+} // namespace energy
+} // namespace vdbmatch

@@ -1,0 +1,50 @@
+/// @file LevelSetIO.h
+/// @brief Reading the input level sets of a matching problem from .vdb files, with the checks that
+///        make a grid usable as a closed surface, and writing .vdb files atomically.
+///
+/// Conventions of an input level set (docs/cli.md, /work/shared/docs/interchange.md): a FloatGrid
+/// of class "level set" holding a signed distance in world units, negative inside, with a narrow
+/// band of active voxels around a closed zero level set; any linear transform with uniform voxel
+/// size (scale, rotation, translation). Houdini names such grids "surface".
+/// @note 3D only for now: a 2D input (a one-voxel-thick slice) is read but will be rejected by
+///       resampleToUnitBox; 2D inputs come later.
+#pragma once
+
+#include <openvdb/openvdb.h>
+
+#include <string>
+
+namespace vdbmatch {
+
+/// Reads one signed-distance level set from a .vdb file.
+/// @param path      file to read
+/// @param gridName  name of the grid to read; if empty, the file must hold exactly one FloatGrid
+/// @return the grid, checked with checkInputLevelSet()
+/// @throw openvdb::IoError if the file is missing, unreadable, not a VDB file or corrupt
+/// @throw openvdb::TypeError if the file has no FloatGrid, or the named grid is not a FloatGrid
+/// @throw openvdb::ValueError if no grid has the given name, several FloatGrids exist and no
+///        name was given (the message lists them), or checkInputLevelSet() fails
+/// Thread-safety: may be called concurrently for different files.
+openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
+
+/// Checks that @a grid can be used as the signed distance of a closed surface:
+/// - grid class GRID_LEVEL_SET;
+/// - a linear transform with uniform voxel size (a similarity: no shear or non-uniform scale);
+/// - finite values everywhere (active, inactive, tiles, background) and a positive background;
+/// - no active tiles, at least one active voxel, and a zero crossing (active values of both
+///   signs);
+/// - the outermost layer of active voxels (those on the faces of the active-voxel bounding box)
+///   lies outside the surface, at least half a voxel away (d >= h/2). This cheaply detects open
+///   or clipped surfaces, whose zero crossing reaches the edge of the band, and flipped signs.
+/// @param grid     the grid
+/// @param context  names the grid in messages, e.g. "file 'a.vdb', grid 'surface'"
+/// @throw openvdb::ValueError naming the first failed check
+void checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context);
+
+/// Writes @a grids and @a fileMeta to @a path without ever leaving a partial file there: writes
+/// a temporary file in the same directory, flushes it to disk and renames it over @a path.
+/// @throw openvdb::IoError if the temporary file cannot be written or renamed (it is removed)
+void writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids,
+                          const openvdb::MetaMap& fileMeta);
+
+} // namespace vdbmatch

@@ -1,0 +1,310 @@
+/// @file SimplexLattice.cc
+#include "SimplexLattice.h"
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/tree/LeafManager.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <numeric>
+
+namespace vdbmatch {
+
+namespace {
+
+constexpr int MIN_LEVEL = 1;
+constexpr int MAX_LEVEL = 12;
+
+template <int D>
+std::array<std::array<int, D + 1>, (D == 2 ? 2 : 6)>
+makeKuhn(bool wantAxis)
+{
+    std::array<std::array<int, D + 1>, (D == 2 ? 2 : 6)> out{};
+    std::array<int, D> perm;
+    std::iota(perm.begin(), perm.end(), 0);
+    int p = 0;
+    do {
+        int mask = 0;
+        out[p][0] = wantAxis ? -1 : 0;
+        for (int m = 1; m <= D; ++m) {
+            mask |= 1 << perm[m - 1];
+            out[p][m] = wantAxis ? perm[m - 1] : mask;
+        }
+        ++p;
+    } while (std::next_permutation(perm.begin(), perm.end()));
+    return out;
+}
+
+} // namespace
+
+template <int D>
+const std::array<std::array<int, D + 1>, (D == 2 ? 2 : 6)>&
+KuhnSplit<D>::path()
+{
+    static const auto table = makeKuhn<D>(false);
+    return table;
+}
+
+template <int D>
+const std::array<std::array<int, D + 1>, (D == 2 ? 2 : 6)>&
+KuhnSplit<D>::axis()
+{
+    static const auto table = makeKuhn<D>(true);
+    return table;
+}
+
+template <int D>
+Vec<D>
+SimplexLattice<D>::nodePosition(std::size_t i) const
+{
+    Vec<D> x;
+    for (int a = 0; a < D; ++a) x[a] = mNodeCoords[i][a] * mH;
+    return x;
+}
+
+template <int D>
+NodeVectors<D>
+SimplexLattice<D>::nodePositions() const
+{
+    NodeVectors<D> X(D, nodeCount());
+    for (std::size_t i = 0; i < nodeCount(); ++i) X.col(i) = nodePosition(i);
+    return X;
+}
+
+template <int D>
+bool
+SimplexLattice<D>::isBoundaryNode(std::size_t i) const
+{
+    const int n = resolution();
+    for (int a = 0; a < D; ++a) {
+        const int c = mNodeCoords[i][a];
+        if (c <= 0 || c >= n) return true;
+    }
+    return false;
+}
+
+template <int D>
+int32_t
+SimplexLattice<D>::findNode(const openvdb::Coord& ijk) const
+{
+    return mNodeIndex->tree().getValue(ijk);
+}
+
+template <int D>
+SimplexLattice<D>
+SimplexLattice<D>::dense(int level)
+{
+    const int n = 1 << level;
+    return box(level, openvdb::CoordBBox(openvdb::Coord(0), openvdb::Coord(n - 1)));
+}
+
+template <int D>
+SimplexLattice<D>
+SimplexLattice<D>::box(int level, const openvdb::CoordBBox& bbox)
+{
+    if (level < MIN_LEVEL || level > MAX_LEVEL)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "SimplexLattice::box: level must be in [" << MIN_LEVEL << ", " << MAX_LEVEL
+                                                                << "], got " << level);
+    const int n = 1 << level;
+    openvdb::Coord lo = openvdb::Coord::maxComponent(bbox.min(), openvdb::Coord(0));
+    openvdb::Coord hi = openvdb::Coord::minComponent(bbox.max(), openvdb::Coord(n - 1));
+    if (D == 2) lo.z() = hi.z() = 0;
+    auto mask = openvdb::MaskGrid::create(false);
+    if (lo.x() <= hi.x() && lo.y() <= hi.y() && lo.z() <= hi.z()) {
+        mask->tree().denseFill(openvdb::CoordBBox(lo, hi), true, true);
+    }
+    return fromCellMasks(level, {mask});
+}
+
+template <int D>
+SimplexLattice<D>
+SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid::ConstPtr>& masks)
+{
+    if (level < MIN_LEVEL || level > MAX_LEVEL)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "SimplexLattice::fromCellMasks: level must be in ["
+                          << MIN_LEVEL << ", " << MAX_LEVEL << "], got " << level);
+    SimplexLattice L;
+    L.mLevel = level;
+    L.mH = 1.0 / Real(1 << level);
+    const int n = 1 << level;
+
+    // 1. Cells, block by block (one block per leaf node of each mask), in a fixed order.
+    for (std::size_t s = 0; s < masks.size(); ++s) {
+        if (!masks[s]) continue;
+        const int side = 1 << s;
+        openvdb::MaskTree tree(masks[s]->tree());
+        tree.voxelizeActiveTiles();
+        for (auto leaf = tree.cbeginLeaf(); leaf; ++leaf) {
+            Block b{L.mCells.size(), 0, 0, 0};
+            for (auto v = leaf->cbeginValueOn(); v; ++v) {
+                Cell c;
+                c.origin = v.getCoord() << s;
+                if (D == 2) {
+                    if (v.getCoord().z() != 0) continue;
+                    c.origin.z() = 0;
+                }
+                for (int a = 0; a < D; ++a) {
+                    if (c.origin[a] < 0 || c.origin[a] + side > n)
+                        OPENVDB_THROW(openvdb::ValueError,
+                                      "SimplexLattice::fromCellMasks: cell " << c.origin
+                                                                             << " of side " << side
+                                                                             << " lies outside the unit box");
+                }
+                c.log2Size = int(s);
+                L.mCells.push_back(c);
+            }
+            b.cellEnd = L.mCells.size();
+            if (b.cellEnd > b.cellBegin) L.mBlocks.push_back(b);
+        }
+    }
+
+    // 2. Nodes: every cell corner, numbered in the leaf order of a node mask.
+    auto cornerCoord = [](const Cell& c, int corner) {
+        openvdb::Coord ijk = c.origin;
+        for (int a = 0; a < D; ++a)
+            if (corner & (1 << a)) ijk[a] += 1 << c.log2Size;
+        return ijk;
+    };
+    auto nodeMask = openvdb::MaskGrid::create(false);
+    {
+        auto acc = nodeMask->getAccessor();
+        for (const Cell& c : L.mCells)
+            for (int k = 0; k < CORNERS; ++k) acc.setValueOn(cornerCoord(c, k));
+    }
+    L.mNodeIndex = openvdb::Int32Grid::create(-1);
+    L.mNodeIndex->tree().topologyUnion(nodeMask->tree());
+    {
+        auto acc = L.mNodeIndex->getAccessor();
+        int32_t next = 0;
+        for (auto leaf = L.mNodeIndex->tree().beginLeaf(); leaf; ++leaf) {
+            for (auto v = leaf->beginValueOn(); v; ++v) {
+                v.setValue(next++);
+                L.mNodeCoords.push_back(v.getCoord());
+            }
+        }
+    }
+
+    // 3. Corner node indices, and per block the sorted list of touched nodes (slots).
+    std::vector<std::vector<int32_t>> blockNodes(L.mBlocks.size());
+    L.mCellSlots.resize(L.mCells.size() * CORNERS);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.mBlocks.size()),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          openvdb::Int32Grid::ConstAccessor acc = L.mNodeIndex->getConstAccessor();
+                          for (std::size_t bi = r.begin(); bi != r.end(); ++bi) {
+                              const Block& b = L.mBlocks[bi];
+                              auto& nodes = blockNodes[bi];
+                              for (std::size_t ci = b.cellBegin; ci < b.cellEnd; ++ci) {
+                                  Cell& c = L.mCells[ci];
+                                  for (int k = 0; k < CORNERS; ++k) {
+                                      c.corners[k] = acc.getValue(cornerCoord(c, k));
+                                      nodes.push_back(c.corners[k]);
+                                  }
+                              }
+                              std::sort(nodes.begin(), nodes.end());
+                              nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+                          }
+                      });
+    std::size_t slots = 0;
+    for (std::size_t bi = 0; bi < L.mBlocks.size(); ++bi) {
+        L.mBlocks[bi].slotBegin = slots;
+        slots += blockNodes[bi].size();
+        L.mBlocks[bi].slotEnd = slots;
+    }
+    L.mSlotNodes.resize(slots);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.mBlocks.size()),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t bi = r.begin(); bi != r.end(); ++bi) {
+                              const Block& b = L.mBlocks[bi];
+                              const auto& nodes = blockNodes[bi];
+                              std::copy(nodes.begin(), nodes.end(), L.mSlotNodes.begin() + b.slotBegin);
+                              for (std::size_t ci = b.cellBegin; ci < b.cellEnd; ++ci) {
+                                  for (int k = 0; k < CORNERS; ++k) {
+                                      auto it = std::lower_bound(nodes.begin(), nodes.end(),
+                                                                 L.mCells[ci].corners[k]);
+                                      L.mCellSlots[ci * CORNERS + k] =
+                                          int32_t(b.slotBegin + (it - nodes.begin()));
+                                  }
+                              }
+                          }
+                      });
+
+    // 4. Gather lists: for each node, its slots in block order.
+    L.mGatherBegin.assign(L.nodeCount() + 1, 0);
+    for (int32_t node : L.mSlotNodes) ++L.mGatherBegin[node + 1];
+    std::partial_sum(L.mGatherBegin.begin(), L.mGatherBegin.end(), L.mGatherBegin.begin());
+    L.mGatherSlots.resize(slots);
+    std::vector<std::size_t> fill(L.mGatherBegin.begin(), L.mGatherBegin.end() - 1);
+    for (std::size_t s = 0; s < slots; ++s) L.mGatherSlots[fill[L.mSlotNodes[s]]++] = int32_t(s);
+    return L;
+}
+
+template <int D>
+void
+SimplexLattice<D>::gatherSlots(const NodeVectors<D>& perSlot, NodeVectors<D>& out,
+                               bool threaded) const
+{
+    out.resize(D, nodeCount());
+    auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            Vec<D> g = Vec<D>::Zero();
+            for (std::size_t k = mGatherBegin[i]; k < mGatherBegin[i + 1]; ++k)
+                g += perSlot.col(mGatherSlots[k]);
+            out.col(i) = g;
+        }
+    };
+    const tbb::blocked_range<std::size_t> range(0, nodeCount(), 1024);
+    if (threaded) tbb::parallel_for(range, body);
+    else body(range);
+}
+
+template <int D>
+openvdb::Vec3dGrid::Ptr
+SimplexLattice<D>::toGrid(const NodeVectors<D>& u) const
+{
+    if (std::size_t(u.cols()) != nodeCount())
+        OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::toGrid: expected "
+                                               << nodeCount() << " node values, got " << u.cols());
+    auto grid = openvdb::Vec3dGrid::create(openvdb::Vec3d(0.0));
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(mH));
+    grid->setName("displacement");
+    grid->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    grid->tree().topologyUnion(mNodeIndex->tree());
+    auto acc = mNodeIndex->getConstAccessor();
+    for (auto leaf = grid->tree().beginLeaf(); leaf; ++leaf) {
+        for (auto v = leaf->beginValueOn(); v; ++v) {
+            const int32_t i = acc.getValue(v.getCoord());
+            openvdb::Vec3d value(0.0);
+            for (int a = 0; a < D; ++a) value[a] = u(a, i);
+            v.setValue(value);
+        }
+    }
+    return grid;
+}
+
+template <int D>
+NodeVectors<D>
+SimplexLattice<D>::fromGrid(const openvdb::Vec3dGrid& grid) const
+{
+    const openvdb::Vec3d vs = grid.voxelSize();
+    if (std::abs(vs[0] - mH) > 1e-12 * mH || !grid.hasUniformVoxels())
+        OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::fromGrid: expected uniform voxel size "
+                                               << mH << ", got " << vs);
+    NodeVectors<D> u = NodeVectors<D>::Zero(D, nodeCount());
+    auto acc = grid.getConstAccessor();
+    for (std::size_t i = 0; i < nodeCount(); ++i) {
+        openvdb::Vec3d value;
+        if (acc.probeValue(mNodeCoords[i], value))
+            for (int a = 0; a < D; ++a) u(a, i) = value[a];
+    }
+    return u;
+}
+
+template class SimplexLattice<2>;
+template class SimplexLattice<3>;
+template struct KuhnSplit<2>;
+template struct KuhnSplit<3>;
+
+} // namespace vdbmatch
