@@ -20,10 +20,13 @@ template <int D> struct MatchingProblem
     typename FieldSampler<D>::Ptr shape1, shape2;
     std::unique_ptr<Energy<D>> energy;
 
+    /// @param cellBox  if given, only the cells in this index box (default: every cell of Omega)
     MatchingProblem(int level, openvdb::FloatGrid::Ptr sdf1, openvdb::FloatGrid::Ptr sdf2,
-                    const EnergyParameters& params, EnergyKind kind)
+                    const EnergyParameters& params, EnergyKind kind,
+                    const openvdb::CoordBBox* cellBox = nullptr)
     {
-        lattice = std::make_unique<SimplexLattice<D>>(SimplexLattice<D>::dense(level));
+        lattice = std::make_unique<SimplexLattice<D>>(
+            cellBox ? SimplexLattice<D>::box(level, *cellBox) : SimplexLattice<D>::dense(level));
         ShapeFieldOptions opts;
         opts.tau = params.tau;
         shape1 = FieldSampler<D>::build({sdf1}, opts);

@@ -461,6 +461,9 @@ expectConvergence(const std::vector<LevelErrors>& e, Real normalBound, Real curv
     for (size_t i = 1; i < e.size(); ++i) {
         EXPECT_GE(std::log2(e[i - 1].normal / e[i].normal), 1.5) << "level " << e[i].level;
         EXPECT_GE(std::log2(e[i - 1].curvature / e[i].curvature), 1.0) << "level " << e[i].level;
+        // n^T S n = 1 holds at the nodes; between them only up to the interpolation error.
+        EXPECT_GE(std::log2(e[i - 1].normalEigenvalue / e[i].normalEigenvalue), 1.5)
+            << "level " << e[i].level;
     }
 }
 

@@ -59,12 +59,6 @@ hashNoise(int64_t i, int64_t j, int64_t k)
     return 2.0 * Real(z >> 11) / Real(1ull << 53) - 1.0;
 }
 
-openvdb::Coord
-nodeOf(const openvdb::FloatGrid::ValueOnCIter& it)
-{
-    return it.getCoord();
-}
-
 /// Max errors at the nodes with fields and |d| <= maxDistance: normal (angle-free |n - n*|),
 /// tangential eigenvalues of S = R^2 against the offset curvatures, and |n^T S n - 1|.
 struct NodeErrors
@@ -81,7 +75,7 @@ nodeErrors(const ShapeFields<D>& fields, const openvdb::FloatGrid& grid, const S
     NodeErrors e;
     const Real h = fields.voxelSize();
     for (auto it = grid.cbeginValueOn(); it; ++it) {
-        const openvdb::Coord ijk = nodeOf(it);
+        const openvdb::Coord ijk = it.getCoord();
         if (D == 2 && ijk[2] != 0) continue;
         NodeFields<D> f;
         if (!fields.getNode(ijk, f)) continue;
@@ -292,7 +286,7 @@ checkValidityFollowsActiveStencil(const openvdb::FloatGrid& grid)
     EXPECT_GT(invalid, 0u);
     // Inactive voxels never get fields.
     NodeFields<D> f;
-    EXPECT_FALSE(fields.getNode(openvdb::Coord(16, 16, 0), f)); // circle/sphere centre
+    EXPECT_FALSE(fields.getNode(openvdb::Coord(16, 16, 0), f)); // outside the band
 }
 
 TEST(ShapeFields, ValidityFollowsActiveStencil)

@@ -11,8 +11,10 @@
 ///     w_{+1} = \tfrac12(\tfrac12 + t)^2 @f]
 /// and the derivatives -(1/2 - t), -2t, 1/2 + t (times 1/h); 3^D taps in total. Qf is C¹ with
 /// knots at the half-integers, reproduces linear functions exactly and is O(h²) accurate, and
-/// its derivatives are O(h²) accurate too. Values and derivatives come from the same
-/// interpolant, so an energy assembled from them has an exact gradient.
+/// its derivatives are O(h²) accurate too. It is not interpolating: Qf = f + (h²/8) Δf + O(h⁴)
+/// (exactly so for quadratics), e.g. d is shifted by (h²/8) times the sum of the curvatures.
+/// Values and derivatives come from the same interpolant, so an energy assembled from them has
+/// an exact gradient.
 ///
 /// Spaces: positions x are in Omega coordinates (node i of a tier is at x = i*h of that tier,
 /// i.e. the world space of the input grids); derivatives are with respect to x.
@@ -26,7 +28,6 @@
 
 #include <openvdb/openvdb.h>
 
-#include <array>
 #include <cstdint>
 #include <memory>
 #include <vector>

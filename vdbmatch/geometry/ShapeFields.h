@@ -6,7 +6,8 @@
 /// of active voxels gets
 /// - d, the distance value itself,
 /// - n = ∇d / |∇d|, the unit outer normal of the offset surface through the node (central
-///   differences),
+///   differences); where the discrete gradient (nearly) vanishes, on the medial axis, n = e_x so
+///   that d stays available there,
 /// - R = S^{1/2} with S the regularized shape operator of eq:defSi,
 ///   @f[ S = \mathcal{R}\big(D^2 d + n \otimes n\big)
 ///         := Q^T \mathrm{diag}\big(\max(|\lambda_1|,\tau), \dots, \max(|\lambda_D|,\tau)\big) Q,

@@ -2,21 +2,18 @@
 /// @brief Placement of the shapes in Omega and resampling of level sets as distances in Omega.
 #include "UnitBox.h"
 
-#include <openvdb/math/Proximity.h>
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
 #include <tbb/blocked_range.h>
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -36,94 +33,132 @@ const double HALF_VOXEL_DIAGONAL = 0.5 * std::sqrt(3.0);
 /// it the narrow band of a sphere had isolated errors of half a voxel (with it, < 0.15 voxel).
 constexpr int MESH_TO_VOLUME_FLAGS = 0;
 
-/// A polygon mesh in the index space of the output grid; polygons are quads or triangles
-/// (fourth index util::INVALID_IDX), with the polygons around each vertex.
-struct Mesh
+/// Squared distance from p to the triangle (a, b, c), by the Voronoi regions of its corners and
+/// edges (Ericson, Real-Time Collision Detection, 5.1.5). Degenerate triangles fall back to
+/// their edges.
+inline double
+triangleDistanceSqr(const openvdb::Vec3d& p, const openvdb::Vec3d& a, const openvdb::Vec3d& b,
+                    const openvdb::Vec3d& c)
 {
-    std::vector<openvdb::Vec3s> points;
-    std::vector<openvdb::Vec4I> polygons;
-    std::vector<uint32_t> vertexPolygonsBegin; ///< CSR over points into vertexPolygons
-    std::vector<int32_t> vertexPolygons;
+    using openvdb::Vec3d;
+    const Vec3d ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return ap.lengthSqr();
+    const Vec3d bp = p - b;
+    const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+    if (d3 >= 0.0 && d4 <= d3) return bp.lengthSqr();
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 && d1 - d3 > 0.0) {
+        return (ap - ab * (d1 / (d1 - d3))).lengthSqr();
+    }
+    const Vec3d cp = p - c;
+    const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+    if (d6 >= 0.0 && d5 <= d6) return cp.lengthSqr();
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 && d2 - d6 > 0.0) {
+        return (ap - ac * (d2 / (d2 - d6))).lengthSqr();
+    }
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 && (d4 - d3) + (d5 - d6) > 0.0) {
+        return (bp - (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)))).lengthSqr();
+    }
+    const double area = va + vb + vc;
+    if (area > 0.0) return (ap - ab * (vb / area) - ac * (vc / area)).lengthSqr();
+    // Degenerate (collinear or coincident corners): the nearest of the three edges.
+    double best = std::numeric_limits<double>::max();
+    const Vec3d corner[3] = {a, b, c};
+    for (int e = 0; e < 3; ++e) {
+        const Vec3d& s = corner[e];
+        const Vec3d d = corner[(e + 1) % 3] - s;
+        const double len2 = d.lengthSqr();
+        const double t = len2 > 0.0 ? std::clamp((p - s).dot(d) / len2, 0.0, 1.0) : 0.0;
+        best = std::min(best, (p - s - d * t).lengthSqr());
+    }
+    return best;
+}
 
-    int corners(int32_t n) const
+/// A short list of distinct polygon indices, to skip repeated distance evaluations. When full,
+/// insert() accepts everything (a repeat is then merely evaluated twice).
+class PolygonList
+{
+public:
+    /// Adds n; false if it was already listed.
+    bool insert(int32_t n)
     {
-        return polygons[size_t(n)][3] == openvdb::util::INVALID_IDX ? 3 : 4;
+        const auto end = mItems.begin() + std::ptrdiff_t(mSize);
+        if (std::find(mItems.begin(), end, n) != end) return false;
+        if (mSize < CAPACITY) mItems[mSize++] = n;
+        return true;
     }
 
-    void buildAdjacency()
+private:
+    /// The polygons of 26 neighbours plus a few descent steps.
+    static constexpr size_t CAPACITY = 64;
+    std::array<int32_t, CAPACITY> mItems;
+    size_t mSize = 0;
+};
+
+/// A polygon mesh in the index space of the output grid: quads or triangles (fourth index
+/// util::INVALID_IDX), with the corners of each polygon in double precision and the polygons
+/// around each vertex.
+class Mesh
+{
+public:
+    std::vector<openvdb::Vec3s> points;
+    std::vector<openvdb::Vec4I> polygons;
+
+    /// Builds the tables used by distanceSqr() and descend(); call after filling points and
+    /// polygons.
+    void finalize()
     {
-        vertexPolygonsBegin.assign(points.size() + 1, 0);
+        mCorners.resize(polygons.size() * 4);
+        mVertexBegin.assign(points.size() + 1, 0);
         for (size_t n = 0; n < polygons.size(); ++n) {
-            for (int c = 0; c < corners(int32_t(n)); ++c)
-                ++vertexPolygonsBegin[polygons[n][c] + 1];
+            const int count = corners(n);
+            for (int c = 0; c < 4; ++c) {
+                mCorners[n * 4 + size_t(c)] = openvdb::Vec3d(points[polygons[n][c % count]]);
+            }
+            for (int c = 0; c < count; ++c)
+                ++mVertexBegin[polygons[n][c] + 1];
         }
-        for (size_t v = 0; v < points.size(); ++v) {
-            vertexPolygonsBegin[v + 1] += vertexPolygonsBegin[v];
-        }
-        vertexPolygons.resize(vertexPolygonsBegin.back());
-        std::vector<uint32_t> fill(vertexPolygonsBegin.begin(), vertexPolygonsBegin.end() - 1);
+        for (size_t v = 0; v < points.size(); ++v)
+            mVertexBegin[v + 1] += mVertexBegin[v];
+        mVertexPolygons.resize(mVertexBegin.back());
+        std::vector<uint32_t> next(mVertexBegin.begin(), mVertexBegin.end() - 1);
         for (size_t n = 0; n < polygons.size(); ++n) {
-            for (int c = 0; c < corners(int32_t(n)); ++c) {
-                vertexPolygons[fill[polygons[n][c]]++] = int32_t(n);
+            for (int c = 0; c < corners(n); ++c) {
+                mVertexPolygons[next[polygons[n][c]]++] = int32_t(n);
             }
         }
     }
 
     /// Squared distance from p to polygon n; a quad is split into (0,1,2) and (0,2,3), as in
-    /// tools::meshToVolume. @a onBoundary tells whether the nearest point lies on the boundary
-    /// of the polygon (an edge or a corner, not the diagonal of a quad).
-    double distanceSqr(int32_t n, const openvdb::Vec3d& p, bool& onBoundary) const
+    /// tools::meshToVolume.
+    double distanceSqr(int32_t n, const openvdb::Vec3d& p) const
     {
-        // Barycentric weights below this count as 0 (the nearest point is on an edge).
-        constexpr double EDGE_WEIGHT = 1e-9;
-        const openvdb::Vec4I& poly = polygons[size_t(n)];
-        const openvdb::Vec3d a(points[poly[0]]), b(points[poly[1]]), c(points[poly[2]]);
-        openvdb::Vec3d uvw;
-        double d = (p - openvdb::math::closestPointOnTriangleToPoint(a, b, c, p, uvw)).lengthSqr();
-        if (poly[3] == openvdb::util::INVALID_IDX) {
-            onBoundary = uvw.x() < EDGE_WEIGHT || uvw.y() < EDGE_WEIGHT || uvw.z() < EDGE_WEIGHT;
-            return d;
-        }
-        // Quad: in (a, b, c) the edge ac (weight of b = 0) is the interior diagonal.
-        onBoundary = uvw.x() < EDGE_WEIGHT || uvw.z() < EDGE_WEIGHT;
-        const openvdb::Vec3d e(points[poly[3]]);
-        const double d2 =
-            (p - openvdb::math::closestPointOnTriangleToPoint(a, c, e, p, uvw)).lengthSqr();
-        if (d2 < d) {
-            d = d2;
-            onBoundary = uvw.x() < EDGE_WEIGHT || uvw.y() < EDGE_WEIGHT;
-        }
-        return d;
+        const openvdb::Vec3d* c = &mCorners[size_t(n) * 4];
+        const double d = triangleDistanceSqr(p, c[0], c[1], c[2]);
+        return isQuad(size_t(n)) ? std::min(d, triangleDistanceSqr(p, c[0], c[2], c[3])) : d;
     }
 
-    /// Greedy descent over the mesh from polygon @a n, at squared distance @a dSqr from p: while
-    /// the nearest point of the current polygon lies on its boundary, moves to the nearest
-    /// polygon sharing a vertex with it if that is nearer. Ties go to the lower index, so the
-    /// result is deterministic.
-    /// @note When the nearest point is inside the polygon, a polygon next to it can only be
-    /// nearer where the surface curves towards p, by O(polygon size^2 * curvature); that
-    /// second-order error is accepted to avoid searching the neighbourhood of every voxel.
-    void descend(const openvdb::Vec3d& p, int32_t& n, double& dSqr, bool onBoundary) const
+    /// Steepest descent over the mesh from polygon @a n at squared distance @a dSqr from p:
+    /// moves to the nearest polygon sharing a vertex with the current one while that is nearer,
+    /// i.e. to a local minimum of the distance over the mesh. Ties go to the lower index, so the
+    /// result is deterministic. Polygons in @a evaluated (already compared with @a n) are
+    /// skipped; the polygons evaluated here are added.
+    void descend(const openvdb::Vec3d& p, int32_t& n, double& dSqr, PolygonList& evaluated) const
     {
-        for (int step = 0; step < MAX_DESCENT_STEPS && onBoundary; ++step) {
+        for (int step = 0; step < MAX_DESCENT_STEPS; ++step) {
             const int32_t current = n;
-            std::array<int32_t, MAX_VISITED> visited;
-            size_t numVisited = 0;
-            for (int c = 0; c < corners(current); ++c) {
+            for (int c = 0; c < corners(size_t(current)); ++c) {
                 const uint32_t v = polygons[size_t(current)][c];
-                for (uint32_t k = vertexPolygonsBegin[v]; k < vertexPolygonsBegin[v + 1]; ++k) {
-                    const int32_t q = vertexPolygons[k];
-                    if (q == current || std::find(visited.begin(), visited.begin() + numVisited,
-                                                  q) != visited.begin() + numVisited) {
-                        continue;
-                    }
-                    if (numVisited < MAX_VISITED) visited[numVisited++] = q;
-                    bool qOnBoundary = false;
-                    const double d = distanceSqr(q, p, qOnBoundary);
+                for (uint32_t k = mVertexBegin[v]; k < mVertexBegin[v + 1]; ++k) {
+                    const int32_t q = mVertexPolygons[k];
+                    if (q == current || !evaluated.insert(q)) continue;
+                    const double d = distanceSqr(q, p);
                     if (d < dSqr || (d == dSqr && q < n)) {
                         dSqr = d;
                         n = q;
-                        onBoundary = qOnBoundary;
                     }
                 }
             }
@@ -131,18 +166,23 @@ struct Mesh
         }
     }
 
-    /// Bound on the descent steps: the start is the polygon nearest to a neighbouring voxel, at
-    /// most a few polygons away from the nearest one.
+private:
+    bool isQuad(size_t n) const { return polygons[n][3] != openvdb::util::INVALID_IDX; }
+    int corners(size_t n) const { return isQuad(n) ? 4 : 3; }
+
+    /// Bound on the descent steps: the start is the polygon nearest to a neighbouring voxel, a
+    /// few polygons from the nearest one.
     static constexpr int MAX_DESCENT_STEPS = 64;
-    /// Polygons remembered per step to skip repeats (a vertex of a volumeToMesh mesh has a
-    /// handful of polygons; beyond this, repeats are merely evaluated twice).
-    static constexpr size_t MAX_VISITED = 32;
+    std::vector<openvdb::Vec3d> mCorners; ///< 4 per polygon (a triangle repeats corner 0)
+    std::vector<uint32_t> mVertexBegin;   ///< CSR over points into mVertexPolygons
+    std::vector<int32_t> mVertexPolygons;
 };
 
-/// Dense index of the node box [lo, lo + n)^3.
+/// The node box [lo, lo + n)^3 as a dense array, x fastest.
 struct NodeBox
 {
     int lo, n;
+
     size_t size() const { return size_t(n) * size_t(n) * size_t(n); }
     bool contains(const openvdb::Coord& c) const
     {
@@ -158,14 +198,39 @@ struct NodeBox
         const size_t nn = size_t(n);
         return openvdb::Coord(lo + int(i % nn), lo + int((i / nn) % nn), lo + int(i / (nn * nn)));
     }
+    /// True if the 26 neighbours of c are all in the box.
+    bool isInterior(const openvdb::Coord& c) const
+    {
+        return c[0] > lo && c[1] > lo && c[2] > lo && c[0] < lo + n - 1 && c[1] < lo + n - 1 &&
+               c[2] < lo + n - 1;
+    }
+};
+
+/// The 26 neighbour offsets and their index offsets in a NodeBox.
+struct Neighbours
+{
+    std::array<openvdb::Coord, 26> offset;
+    std::array<std::ptrdiff_t, 26> delta;
+    std::array<double, 26> length;
+
+    explicit Neighbours(const NodeBox& box)
+    {
+        const std::ptrdiff_t n = box.n;
+        for (int k = 0, o = 0; k < 27; ++k) {
+            if (k == 13) continue; // the centre
+            offset[o] = openvdb::Coord(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
+            delta[o] = offset[o][0] + n * (offset[o][1] + n * offset[o][2]);
+            length[o] = offset[o].asVec3d().length();
+            ++o;
+        }
+    }
 };
 
 /// Sets every voxel of the node box of @a level that is not active in @a grid to its signed
 /// distance to @a mesh, layer by layer outwards from the active voxels: a new voxel starts from
 /// the nearest of the polygons closest to its 26 already known neighbours and descends over the
 /// mesh to the nearest polygon (Mesh::descend). The sign is that of the voxel's (flood-filled)
-/// inactive value. The values do not depend on the order of the voxels in a layer or on the
-/// thread count. Returns false if interrupted.
+/// inactive value. The values do not depend on the thread count. Returns false if interrupted.
 /// @throw openvdb::ValueError if no active voxel of @a grid lies in the box.
 bool
 fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, const Mesh& mesh,
@@ -174,15 +239,11 @@ fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, co
     using LeafT = openvdb::FloatTree::LeafNodeType;
     const double h = grid.voxelSize()[0];
     const NodeBox box{-UNIT_BOX_NODE_PADDING, (1 << level) + 2 * UNIT_BOX_NODE_PADDING + 1};
+    const Neighbours nbs(box);
     constexpr uint8_t UNKNOWN = 0, KNOWN = 1, QUEUED = 2;
-    std::unique_ptr<std::atomic<uint8_t>[]> state(new std::atomic<uint8_t>[box.size()]);
+    std::vector<uint8_t> state(box.size(), UNKNOWN);
     std::vector<float> dist(box.size(), 0.0f); // unsigned, index units
     std::vector<int32_t> closest(box.size(), -1);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, box.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t i = r.begin(); i != r.end(); ++i)
-                              state[i] = UNKNOWN;
-                      });
 
     // Seeds: the active voxels (narrow band) inside the box.
     const auto indexAcc = polygonIndex.getConstAccessor();
@@ -202,80 +263,64 @@ fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, co
         OPENVDB_THROW(openvdb::ValueError, "resampleToUnitBox: the placed surface does not meet "
                                            "the unit box");
     }
-    std::array<openvdb::Coord, 26> offsets;
-    for (int k = 0, o = 0; k < 27; ++k) {
-        if (k != 13) offsets[o++] = openvdb::Coord(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1);
-    }
 
-    // Layers: queue the unknown neighbours of the last layer (in parallel; the set does not
-    // depend on the order), then compute them from the known voxels only.
-    tbb::enumerable_thread_specific<std::vector<size_t>> queued;
+    // Distance of voxel i from the polygons nearest to its known neighbours, improved by
+    // descent over the mesh; reads only voxels of earlier layers.
+    auto nearestPolygon = [&](size_t i, float& outDist, int32_t& outPolygon) {
+        const openvdb::Coord ijk = box.coord(i);
+        const openvdb::Vec3d p(ijk.asVec3d());
+        const bool interior = box.isInterior(ijk);
+        PolygonList evaluated;
+        double best = std::numeric_limits<double>::max();
+        int32_t bestPoly = -1;
+        double bound = std::numeric_limits<double>::max(); // if no neighbour knows a polygon
+        for (int k = 0; k < 26; ++k) {
+            if (!interior && !box.contains(ijk + nbs.offset[k])) continue;
+            const size_t j = size_t(std::ptrdiff_t(i) + nbs.delta[k]);
+            if (state[j] != KNOWN) continue;
+            bound = std::min(bound, double(dist[j]) + nbs.length[k]);
+            const int32_t poly = closest[j];
+            if (poly < 0 || !evaluated.insert(poly)) continue;
+            const double d = mesh.distanceSqr(poly, p);
+            if (d < best || (d == best && poly < bestPoly)) {
+                best = d;
+                bestPoly = poly;
+            }
+        }
+        if (bestPoly >= 0) mesh.descend(p, bestPoly, best, evaluated);
+        outDist = float(bestPoly >= 0 ? std::sqrt(best) : bound);
+        outPolygon = bestPoly;
+    };
+
+    // Layers: queue the unknown neighbours of the last layer, then compute them in parallel from
+    // the known voxels only.
+    std::vector<size_t> next;
     std::vector<float> newDist;
     std::vector<int32_t> newClosest;
     while (true) {
-        for (auto& q : queued)
-            q.clear();
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, frontier.size()),
-            [&](const tbb::blocked_range<size_t>& r) {
-                std::vector<size_t>& out = queued.local();
-                for (size_t f = r.begin(); f != r.end(); ++f) {
-                    const openvdb::Coord ijk = box.coord(frontier[f]);
-                    for (const openvdb::Coord& o : offsets) {
-                        const openvdb::Coord nb = ijk + o;
-                        if (!box.contains(nb)) continue;
-                        uint8_t expected = UNKNOWN;
-                        if (state[box.index(nb)].compare_exchange_strong(expected, QUEUED)) {
-                            out.push_back(box.index(nb));
-                        }
-                    }
-                }
-            });
-        frontier.clear();
-        for (const auto& q : queued)
-            frontier.insert(frontier.end(), q.begin(), q.end());
-        if (frontier.empty()) break;
+        next.clear();
+        for (const size_t i : frontier) {
+            const openvdb::Coord ijk = box.coord(i);
+            const bool interior = box.isInterior(ijk);
+            for (int k = 0; k < 26; ++k) {
+                if (!interior && !box.contains(ijk + nbs.offset[k])) continue;
+                const size_t j = size_t(std::ptrdiff_t(i) + nbs.delta[k]);
+                if (state[j] != UNKNOWN) continue;
+                state[j] = QUEUED;
+                next.push_back(j);
+            }
+        }
+        if (next.empty()) break;
         if (interrupt.wasInterrupted()) return false;
+        frontier.swap(next);
         newDist.resize(frontier.size());
         newClosest.resize(frontier.size());
-        tbb::parallel_for(
-            tbb::blocked_range<size_t>(0, frontier.size()),
-            [&](const tbb::blocked_range<size_t>& r) {
-                for (size_t f = r.begin(); f != r.end(); ++f) {
-                    const openvdb::Coord ijk = box.coord(frontier[f]);
-                    const openvdb::Vec3d p(ijk.asVec3d());
-                    std::array<int32_t, 26> tried;
-                    int numTried = 0;
-                    double best = std::numeric_limits<double>::max();
-                    int32_t bestPoly = -1;
-                    bool onBoundary = false;
-                    // Fallback when no neighbour knows a polygon: a path length bound.
-                    double bound = std::numeric_limits<double>::max();
-                    for (const openvdb::Coord& o : offsets) {
-                        const openvdb::Coord nb = ijk + o;
-                        if (!box.contains(nb)) continue;
-                        const size_t j = box.index(nb);
-                        if (state[j] != KNOWN) continue;
-                        bound = std::min(bound, double(dist[j]) + o.asVec3d().length());
-                        const int32_t poly = closest[j];
-                        if (poly < 0 || std::find(tried.begin(), tried.begin() + numTried, poly) !=
-                                            tried.begin() + numTried) {
-                            continue;
-                        }
-                        tried[size_t(numTried++)] = poly;
-                        bool polyOnBoundary = false;
-                        const double d = mesh.distanceSqr(poly, p, polyOnBoundary);
-                        if (d < best || (d == best && poly < bestPoly)) {
-                            best = d;
-                            bestPoly = poly;
-                            onBoundary = polyOnBoundary;
-                        }
-                    }
-                    if (bestPoly >= 0) mesh.descend(p, bestPoly, best, onBoundary);
-                    newDist[f] = float(bestPoly >= 0 ? std::sqrt(best) : bound);
-                    newClosest[f] = bestPoly;
-                }
-            });
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, frontier.size()),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t f = r.begin(); f != r.end(); ++f) {
+                                  nearestPolygon(frontier[f], newDist[f], newClosest[f]);
+                              }
+                          });
         for (size_t f = 0; f < frontier.size(); ++f) {
             state[frontier[f]] = KNOWN;
             dist[frontier[f]] = newDist[f];
@@ -426,7 +471,7 @@ resampleToUnitBox(const openvdb::FloatGrid& levelSet, const UnitBoxPlacement& pl
     mesh.polygons.insert(mesh.polygons.end(), quads.begin(), quads.end());
     triangles = {};
     quads = {};
-    mesh.buildAdjacency();
+    mesh.finalize();
 
     // 3. Narrow band of the distance to the mesh, with the closest polygon of every voxel.
     const openvdb::tools::QuadAndTriangleDataAdapter<openvdb::Vec3s, openvdb::Vec4I> adapter(
