@@ -19,10 +19,10 @@ using namespace vdbmatch;
 
 namespace {
 
-constexpr int LEVEL = 8;              ///< h = 1/256
-constexpr Real RADIUS1 = 0.3;         ///< M1: sphere at the centre
-constexpr Real RADIUS2 = 0.31;        ///< M2: slightly larger, shifted sphere
-constexpr Real BAND_VOXELS = 8;       ///< half-width of the signed-distance grids, voxels
+constexpr int LEVEL = 8;         ///< h = 1/256
+constexpr Real RADIUS1 = 0.3;    ///< M1: sphere at the centre
+constexpr Real RADIUS2 = 0.302;  ///< M2: slightly larger, shifted sphere
+constexpr Real BAND_VOXELS = 12; ///< half-width of the signed-distance grids, voxels
 
 struct BandProblem
 {
@@ -34,7 +34,7 @@ struct BandProblem
     BandProblem()
     {
         openvdb::initialize();
-        const Vec<3> c1(0.5, 0.5, 0.5), c2(0.503, 0.498, 0.5);
+        const Vec<3> c1(0.5, 0.5, 0.5), c2(0.501, 0.499, 0.5);
         sdf1 = test::createSdfGrid<3>(
             LEVEL, [&](const Vec<3>& x) { return (x - c1).norm() - RADIUS1; },
             test::DEFAULT_GRID_MARGIN, BAND_VOXELS);
@@ -47,14 +47,16 @@ struct BandProblem
         auto acc = cells->getAccessor();
         for (auto it = sdf1->cbeginValueOn(); it; ++it)
             if (std::abs(*it) < 3 * h) acc.setValueOn(it.getCoord());
-        lattice = std::make_unique<SimplexLattice<3>>(SimplexLattice<3>::fromCellMasks(LEVEL, {cells}));
+        lattice =
+            std::make_unique<SimplexLattice<3>>(SimplexLattice<3>::fromCellMasks(LEVEL, {cells}));
         ShapeFieldOptions opts;
         shape1 = FieldSampler<3>::build({sdf1}, opts);
         shape2 = FieldSampler<3>::build({sdf2}, opts);
         std::mt19937 rng(3);
         std::uniform_real_distribution<Real> U(-0.2 * h, 0.2 * h);
         u.resize(3, lattice->nodeCount());
-        for (Eigen::Index i = 0; i < u.size(); ++i) u.data()[i] = U(rng);
+        for (Eigen::Index i = 0; i < u.size(); ++i)
+            u.data()[i] = U(rng);
     }
 };
 
@@ -74,14 +76,20 @@ BM_SymmetricValueAndGradient(benchmark::State& state)
                 EnergyKind::Symmetric);
     NodeVectors<3> g;
     EnergyTerms t;
-    for (auto _ : state) benchmark::DoNotOptimize(E.valueAndGradient(P.u, g, &t));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(E.valueAndGradient(P.u, g, &t));
     state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(P.lattice->simplexCount()));
     state.counters["simplices"] = double(P.lattice->simplexCount());
     state.counters["band_simplices"] = double(t.bandSimplices);
-    state.counters["simplices_per_s_per_thread"] = benchmark::Counter(
-        double(P.lattice->simplexCount()) / double(state.range(0)), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["simplices_per_s_per_thread"] =
+        benchmark::Counter(double(P.lattice->simplexCount()) / double(state.range(0)),
+                           benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_SymmetricValueAndGradient)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_SymmetricValueAndGradient)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void
 BM_SymmetricValue(benchmark::State& state)
@@ -90,10 +98,12 @@ BM_SymmetricValue(benchmark::State& state)
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
     Energy<3> E(*P.lattice, *P.shape1, *P.shape2, EnergyParameters::defaults(3),
                 EnergyKind::Symmetric);
-    for (auto _ : state) benchmark::DoNotOptimize(E.value(P.u));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(E.value(P.u));
     state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(P.lattice->simplexCount()));
-    state.counters["simplices_per_s_per_thread"] = benchmark::Counter(
-        double(P.lattice->simplexCount()) / double(state.range(0)), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["simplices_per_s_per_thread"] =
+        benchmark::Counter(double(P.lattice->simplexCount()) / double(state.range(0)),
+                           benchmark::Counter::kIsIterationInvariantRate);
 }
 BENCHMARK(BM_SymmetricValue)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -105,12 +115,18 @@ BM_DirectionalValueAndGradient(benchmark::State& state)
     Energy<3> E(*P.lattice, *P.shape1, *P.shape2, EnergyParameters::defaults(3),
                 EnergyKind::Directional);
     NodeVectors<3> g;
-    for (auto _ : state) benchmark::DoNotOptimize(E.valueAndGradient(P.u, g));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(E.valueAndGradient(P.u, g));
     state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(P.lattice->simplexCount()));
-    state.counters["simplices_per_s_per_thread"] = benchmark::Counter(
-        double(P.lattice->simplexCount()) / double(state.range(0)), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["simplices_per_s_per_thread"] =
+        benchmark::Counter(double(P.lattice->simplexCount()) / double(state.range(0)),
+                           benchmark::Counter::kIsIterationInvariantRate);
 }
-BENCHMARK(BM_DirectionalValueAndGradient)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_DirectionalValueAndGradient)
+    ->Arg(1)
+    ->Arg(2)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void
 BM_BuildFields(benchmark::State& state)
@@ -118,7 +134,8 @@ BM_BuildFields(benchmark::State& state)
     auto& P = problem();
     tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
     ShapeFieldOptions opts;
-    for (auto _ : state) benchmark::DoNotOptimize(FieldSampler<3>::build({P.sdf1}, opts));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(FieldSampler<3>::build({P.sdf1}, opts));
     state.counters["sdf_voxels"] = double(P.sdf1->activeVoxelCount());
 }
 BENCHMARK(BM_BuildFields)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -1,8 +1,9 @@
 /// @file TestMain.cc
 /// @brief GoogleTest main: initialises OpenVDB and, in Debug builds, traps floating-point
-///        exceptions (invalid operation, division by zero) so that a NaN is caught where it is made.
-#include <openvdb/openvdb.h>
+///        exceptions (invalid operation, division by zero) so that a NaN is caught where it is
+///        made.
 #include <gtest/gtest.h>
+#include <openvdb/openvdb.h>
 
 #include <cfenv>
 

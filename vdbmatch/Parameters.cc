@@ -54,9 +54,8 @@ EnergyParameters::validate() const
 {
     auto nonNegative = [](const char* name, Real v) {
         if (!std::isfinite(v) || v < 0)
-            OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: " << name
-                                                                    << " must be finite and >= 0, got "
-                                                                    << v);
+            OPENVDB_THROW(openvdb::ValueError,
+                          "EnergyParameters: " << name << " must be finite and >= 0, got " << v);
     };
     nonNegative("c_match", cMatch);
     nonNegative("c_mem", cMem);
@@ -66,7 +65,8 @@ EnergyParameters::validate() const
     if (!std::isfinite(theta))
         OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: theta must be finite");
     if (!std::isfinite(tau) || tau <= 0)
-        OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: tau must be finite and > 0, got " << tau);
+        OPENVDB_THROW(openvdb::ValueError,
+                      "EnergyParameters: tau must be finite and > 0, got " << tau);
     if (!std::isfinite(sigmaFactor) || sigmaFactor <= 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "EnergyParameters: sigma factor must be finite and > 0, got " << sigmaFactor);

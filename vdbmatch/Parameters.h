@@ -32,7 +32,7 @@ struct EnergyParameters
     Real theta = 1.0;    ///< volume exponent: weight sigma^theta (eq:EsymVol), paper uses 0 or 1
     /// Eigenvalue floor of the regularised shape operator S = R(D^2 d + n (x) n), eq:defSi, in
     /// 1/Omega-units. Not listed in tab:parameters; 1 means curvature radii larger than the unit
-    /// box are treated alike (flat).
+    /// box are treated alike (flat). Same value as DEFAULT_SHAPE_OPERATOR_TAU (ShapeFields.h).
     Real tau = 1.0;
     /// Band half-width as a multiple of h: sigma = sigmaFactor * h (tab:parameters: 2).
     Real sigmaFactor = 2.0;

@@ -49,10 +49,11 @@ template <int D> struct MatchingProblem
         for (std::size_t i = 0; i < lattice->nodeCount(); ++i) {
             const Vec<D> x = lattice->nodePosition(i);
             Real bump = 1;
-            for (int a = 0; a < D; ++a) bump *= std::sin(M_PI * x[a]);
+            for (int a = 0; a < D; ++a)
+                bump *= std::sin(M_PI * x[a]);
             for (int a = 0; a < D; ++a) {
-                u(a, i) = amplitude * (bump * std::sin(k[a] * x[(a + 1) % D] * M_PI + phase[a]) +
-                                       0.1 * U(rng));
+                u(a, i) = amplitude *
+                          (bump * std::sin(k[a] * x[(a + 1) % D] * M_PI + phase[a]) + 0.1 * U(rng));
             }
             if (lattice->isBoundaryNode(i)) u.col(i).setZero();
         }
@@ -66,7 +67,8 @@ template <int D> struct MatchingProblem
         std::uniform_real_distribution<Real> U(-1, 1);
         NodeVectors<D> v(D, lattice->nodeCount());
         for (std::size_t i = 0; i < lattice->nodeCount(); ++i)
-            for (int a = 0; a < D; ++a) v(a, i) = lattice->isBoundaryNode(i) ? 0 : lattice->h() * U(rng);
+            for (int a = 0; a < D; ++a)
+                v(a, i) = lattice->isBoundaryNode(i) ? 0 : lattice->h() * U(rng);
         return v;
     }
 };
@@ -77,8 +79,10 @@ template <int D>
 inline openvdb::FloatGrid::Ptr
 sourceSdf(int level)
 {
-    if constexpr (D == 3) return createSphereSdf(level, Vec<3>(0.5, 0.5, 0.5), 0.22);
-    else return createCircleSdf(level, Vec<2>(0.5, 0.5), 0.22);
+    if constexpr (D == 3)
+        return createSphereSdf(level, Vec<3>(0.5, 0.5, 0.5), 0.22);
+    else
+        return createCircleSdf(level, Vec<2>(0.5, 0.5), 0.22);
 }
 
 template <int D>
@@ -87,7 +91,8 @@ targetSdf(int level)
 {
     if constexpr (D == 3)
         return createEllipsoidSdf(level, Vec<3>(0.52, 0.49, 0.5), Vec<3>(0.27, 0.2, 0.23));
-    else return createEllipseSdf(level, Vec<2>(0.52, 0.49), Vec<2>(0.27, 0.19));
+    else
+        return createEllipseSdf(level, Vec<2>(0.52, 0.49), Vec<2>(0.27, 0.19));
 }
 
 /// Parameters with a single active term (c_match, c_mem, c_bend or c_vol by index 0..3).

@@ -42,8 +42,14 @@ checkIdentityIsZero(int level)
 
 } // namespace
 
-TEST(Energy, IdenticalShapesIdentityIsZero3D) { checkIdentityIsZero<3>(4); }
-TEST(Energy, IdenticalShapesIdentityIsZero2D) { checkIdentityIsZero<2>(6); }
+TEST(Energy, IdenticalShapesIdentityIsZero3D)
+{
+    checkIdentityIsZero<3>(4);
+}
+TEST(Energy, IdenticalShapesIdentityIsZero2D)
+{
+    checkIdentityIsZero<2>(6);
+}
 
 TEST(Energy, InvertedSimplexGivesInfinity)
 {
@@ -97,8 +103,14 @@ checkThreadIndependence(int level)
     EXPECT_EQ(P.energy->value(u), e1);
 }
 
-TEST(Energy, ThreadCountIndependent3D) { checkThreadIndependence<3>(4); }
-TEST(Energy, ThreadCountIndependent2D) { checkThreadIndependence<2>(6); }
+TEST(Energy, ThreadCountIndependent3D)
+{
+    checkThreadIndependence<3>(4);
+}
+TEST(Energy, ThreadCountIndependent2D)
+{
+    checkThreadIndependence<2>(6);
+}
 
 TEST(Energy, DirectionalHasOnlyDirectHalves)
 {

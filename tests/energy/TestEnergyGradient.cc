@@ -32,8 +32,8 @@ checkGradient(EnergyKind kind, int term, int level)
 {
     const EnergyParameters params = term < 0 ? EnergyParameters::defaults(D) : singleTerm(D, term);
     MatchingProblem<D> P(level, sourceSdf<D>(level), targetSdf<D>(level), params, kind);
-    const std::string what = std::string(toString(kind)) + " " + (term < 0 ? "total" : termName(term)) +
-                             " " + std::to_string(D) + "D";
+    const std::string what = std::string(toString(kind)) + " " +
+                             (term < 0 ? "total" : termName(term)) + " " + std::to_string(D) + "D";
     for (unsigned seed = 1; seed <= 3; ++seed) {
         const NodeVectors<D> u = P.randomDisplacement(seed, 0.3 * P.lattice->h() * seed);
         ASSERT_GT(P.energy->minJacobianDeterminant(u), 0.2) << what;
@@ -82,17 +82,21 @@ checkGradient(EnergyKind kind, int term, int level)
 
 TEST(EnergyGradient, Symmetric3DPerTerm)
 {
-    for (int term = -1; term < 4; ++term) checkGradient<3>(EnergyKind::Symmetric, term, 4);
+    for (int term = -1; term < 4; ++term)
+        checkGradient<3>(EnergyKind::Symmetric, term, 4);
 }
 TEST(EnergyGradient, Directional3DPerTerm)
 {
-    for (int term = -1; term < 4; ++term) checkGradient<3>(EnergyKind::Directional, term, 4);
+    for (int term = -1; term < 4; ++term)
+        checkGradient<3>(EnergyKind::Directional, term, 4);
 }
 TEST(EnergyGradient, Symmetric2DPerTerm)
 {
-    for (int term = -1; term < 4; ++term) checkGradient<2>(EnergyKind::Symmetric, term, 6);
+    for (int term = -1; term < 4; ++term)
+        checkGradient<2>(EnergyKind::Symmetric, term, 6);
 }
 TEST(EnergyGradient, Directional2DPerTerm)
 {
-    for (int term = -1; term < 4; ++term) checkGradient<2>(EnergyKind::Directional, term, 6);
+    for (int term = -1; term < 4; ++term)
+        checkGradient<2>(EnergyKind::Directional, term, 6);
 }

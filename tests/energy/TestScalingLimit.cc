@@ -20,7 +20,7 @@ using namespace vdbmatch::test;
 
 namespace {
 
-constexpr Real R0 = 0.2;   ///< radius of M1
+constexpr Real R0 = 0.2;     ///< radius of M1
 constexpr Real SHEAR = 0.12; ///< strength of the smooth map below
 
 /// A smooth map that is a pure translation-free shear-and-stretch near M1, identity far away:
@@ -136,14 +136,15 @@ limitEnergies(const SmoothMap<D>& phi, Real tau)
     } else {
         // icosahedron subdivided 6 times, vertices on the sphere; centroid rule per triangle
         const Real t = (1 + std::sqrt(5.0)) / 2;
-        std::vector<Vec<3>> v = {{-1, t, 0}, {1, t, 0},  {-1, -t, 0}, {1, -t, 0},
-                                 {0, -1, t}, {0, 1, t},  {0, -1, -t}, {0, 1, -t},
-                                 {t, 0, -1}, {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
-        for (auto& p : v) p.normalize();
+        std::vector<Vec<3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                 {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                 {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+        for (auto& p : v)
+            p.normalize();
         std::vector<std::array<int, 3>> f = {
-            {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+            {0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
             {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
-            {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+            {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
         for (int level = 0; level < 6; ++level) {
             std::map<std::pair<int, int>, int> mid;
             auto midpoint = [&](int a, int b) {
@@ -187,7 +188,8 @@ imageSdf(int level, const SmoothMap<D>& phi)
     const Real near = 8.0 / Real(1 << level); // the energy samples d2 only near M2
     return createSdfGrid<D>(level, [phi, near](const Vec<D>& x) {
         Vec<D> z = x;
-        for (int it = 0; it < 100; ++it) z = z - (phi(z) - x);
+        for (int it = 0; it < 100; ++it)
+            z = z - (phi(z) - x);
         const Real approx = (z - phi.c).norm() - R0;
         if (std::abs(approx) > near) return approx; // far from M2: not a distance, never used
         Vec<D> u = (z - phi.c).normalized();
@@ -204,7 +206,8 @@ imageSdf(int level, const SmoothMap<D>& phi)
             for (int k = 0; k < D - 1; ++k)
                 J.col(k) = (point(u + e * T.col(k)) - point(u - e * T.col(k))) / (2 * e);
             const Vec<D> r = point(u) - x;
-            const Eigen::Matrix<Real, D - 1, 1> step = -(J.transpose() * J).ldlt().solve(J.transpose() * r);
+            const Eigen::Matrix<Real, D - 1, 1> step =
+                -(J.transpose() * J).ldlt().solve(J.transpose() * r);
             u = (u + T * step).normalized();
             if (step.norm() < 1e-13) break;
         }
@@ -229,10 +232,10 @@ checkScalingLimit(const std::vector<int>& levels)
         const int reach = int(std::ceil((R0 + 2.0 * params.sigmaFactor / n + 1.0 / n) * n));
         openvdb::Coord lo(n / 2 - reach), hi(n / 2 + reach);
         const openvdb::CoordBBox cells(lo, hi);
-        MatchingProblem<D> P(level, createSdfGrid<D>(level, [&](const Vec<D>& x) {
-                                 return (x - phi.c).norm() - R0;
-                             }),
-                             imageSdf<D>(level, phi), params, EnergyKind::Directional, &cells);
+        MatchingProblem<D> P(
+            level,
+            createSdfGrid<D>(level, [&](const Vec<D>& x) { return (x - phi.c).norm() - R0; }),
+            imageSdf<D>(level, phi), params, EnergyKind::Directional, &cells);
         NodeVectors<D> u(D, P.lattice->nodeCount());
         for (std::size_t i = 0; i < P.lattice->nodeCount(); ++i) {
             const Vec<D> x = P.lattice->nodePosition(i);
@@ -243,8 +246,9 @@ checkScalingLimit(const std::vector<int>& levels)
         const Real mem = t.mem[0] / params.cMem, bend = t.bend[0] / params.cBend;
         errMem.push_back(std::abs(mem - limit[0]) / limit[0]);
         errBend.push_back(std::abs(bend - limit[1]) / std::max(limit[1], 1e-3 * limit[0]));
-        std::printf("%dD level %d sigma=%.5f: E_mem %.6g (rel err %.3e)  E_bend %.6g (rel err %.3e)\n",
-                    D, level, P.energy->sigma(), mem, errMem.back(), bend, errBend.back());
+        std::printf(
+            "%dD level %d sigma=%.5f: E_mem %.6g (rel err %.3e)  E_bend %.6g (rel err %.3e)\n", D,
+            level, P.energy->sigma(), mem, errMem.back(), bend, errBend.back());
     }
     for (std::size_t i = 1; i < levels.size(); ++i) {
         EXPECT_LT(errMem[i], errMem[i - 1]) << "membrane error must decrease with sigma, h";
@@ -257,5 +261,11 @@ checkScalingLimit(const std::vector<int>& levels)
 
 } // namespace
 
-TEST(ScalingLimit, DirectionalMembraneAndBending3D) { checkScalingLimit<3>({5, 6, 7}); }
-TEST(ScalingLimit, DirectionalMembraneAndBending2D) { checkScalingLimit<2>({5, 6, 7, 8}); }
+TEST(ScalingLimit, DirectionalMembraneAndBending3D)
+{
+    checkScalingLimit<3>({5, 6, 7});
+}
+TEST(ScalingLimit, DirectionalMembraneAndBending2D)
+{
+    checkScalingLimit<2>({5, 6, 7, 8});
+}

@@ -100,7 +100,8 @@ symmetryGap(int level, EnergyKind kind, bool print)
     phi.c.setConstant(0.5);
     const Real r0 = 0.2, r1 = phi.g(r0);
     auto sphere = [&](Real r) {
-        return createSdfGrid<D>(level, [c = phi.c, r](const Vec<D>& x) { return (x - c).norm() - r; });
+        return createSdfGrid<D>(level,
+                                [c = phi.c, r](const Vec<D>& x) { return (x - c).norm() - r; });
     };
     const auto sdf1 = sphere(r0), sdf2 = sphere(r1);
     const EnergyParameters params = EnergyParameters::defaults(D);
@@ -149,7 +150,8 @@ checkSymmetryConvergence(const std::vector<int>& levels)
     const char* names[4] = {"match", "mem", "bend", "vol"};
     const std::size_t n = levels.size();
     for (int k = 0; k < 4; ++k) {
-        const Real rate = std::log2(sym[0].term[k] / sym[n - 1].term[k]) / (levels[n - 1] - levels[0]);
+        const Real rate =
+            std::log2(sym[0].term[k] / sym[n - 1].term[k]) / (levels[n - 1] - levels[0]);
         std::printf("%dD symmetric relative %s gap: mean rate over levels %d..%d = %.2f\n", D,
                     names[k], levels[0], levels[n - 1], rate);
         EXPECT_GT(rate, minRate[k]) << names[k] << " gap must shrink with h and sigma";
@@ -163,5 +165,11 @@ checkSymmetryConvergence(const std::vector<int>& levels)
 
 } // namespace
 
-TEST(Symmetry, SwirlBulgeSphere3D) { checkSymmetryConvergence<3>({4, 5, 6}); }
-TEST(Symmetry, SwirlBulgeCircle2D) { checkSymmetryConvergence<2>({5, 6, 7, 8}); }
+TEST(Symmetry, SwirlBulgeSphere3D)
+{
+    checkSymmetryConvergence<3>({4, 5, 6});
+}
+TEST(Symmetry, SwirlBulgeCircle2D)
+{
+    checkSymmetryConvergence<2>({5, 6, 7, 8});
+}

@@ -14,7 +14,8 @@ TEST(BandWeight, IntegralSupportAndSmoothness)
         const int n = 2000;
         const Real a = -sigma, step = 2 * sigma / n;
         Real s = eta(a) + eta(sigma);
-        for (int i = 1; i < n; ++i) s += (i % 2 ? 4 : 2) * eta(a + i * step);
+        for (int i = 1; i < n; ++i)
+            s += (i % 2 ? 4 : 2) * eta(a + i * step);
         EXPECT_NEAR(s * step / 3, 1.0, 1e-12);
         EXPECT_EQ(eta(1.0001 * sigma), 0.0);
         EXPECT_EQ(eta(-1.0001 * sigma), 0.0);

@@ -138,19 +138,38 @@ checkCurvatureMatching()
 
 } // namespace
 
-TEST(TangentialDerivative, PolyconvexityIdentities2D) { checkIdentities<2>(); }
-TEST(TangentialDerivative, PolyconvexityIdentities3D) { checkIdentities<3>(); }
-TEST(TangentialDerivative, FrameOperators2D) { checkFrameOperators<2>(); }
-TEST(TangentialDerivative, FrameOperators3D) { checkFrameOperators<3>(); }
-TEST(TangentialDerivative, CurvatureMatching2D) { checkCurvatureMatching<2>(); }
-TEST(TangentialDerivative, CurvatureMatching3D) { checkCurvatureMatching<3>(); }
+TEST(TangentialDerivative, PolyconvexityIdentities2D)
+{
+    checkIdentities<2>();
+}
+TEST(TangentialDerivative, PolyconvexityIdentities3D)
+{
+    checkIdentities<3>();
+}
+TEST(TangentialDerivative, FrameOperators2D)
+{
+    checkFrameOperators<2>();
+}
+TEST(TangentialDerivative, FrameOperators3D)
+{
+    checkFrameOperators<3>();
+}
+TEST(TangentialDerivative, CurvatureMatching2D)
+{
+    checkCurvatureMatching<2>();
+}
+TEST(TangentialDerivative, CurvatureMatching3D)
+{
+    checkCurvatureMatching<3>();
+}
 
 TEST(TangentialDerivative, IdentityMapGivesIdentity)
 {
     test::RandomSource rng;
     const Vec<3> n = rng.unitVector<3>();
-    EXPECT_LE((projectedTangentialDerivative<3>(Mat<3>::Identity(), n, n) - Mat<3>::Identity()).norm(),
-              1e-14);
+    EXPECT_LE(
+        (projectedTangentialDerivative<3>(Mat<3>::Identity(), n, n) - Mat<3>::Identity()).norm(),
+        1e-14);
     // The counterexample of subsec:tangential: tangent spaces mapped with reversed orientation.
     const Vec<2> e1(1, 0), e2(0, 1);
     const Mat<2> X = projectedTangentialDerivative<2>(Mat<2>::Identity(), e1, Vec<2>(-e1));

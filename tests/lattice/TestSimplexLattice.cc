@@ -37,12 +37,14 @@ checkKuhnTiling()
     std::uniform_real_distribution<Real> U(0, 1);
     for (int trial = 0; trial < 1000; ++trial) {
         Vec<D> x;
-        for (int a = 0; a < D; ++a) x[a] = U(rng);
+        for (int a = 0; a < D; ++a)
+            x[a] = U(rng);
         int containing = 0;
         for (std::size_t p = 0; p < paths.size(); ++p) {
             // simplex p = {x : x_{pi(1)} >= x_{pi(2)} >= ... }
             bool in = true;
-            for (int m = 1; m < D; ++m) in = in && x[axes[p][m]] >= x[axes[p][m + 1]];
+            for (int m = 1; m < D; ++m)
+                in = in && x[axes[p][m]] >= x[axes[p][m + 1]];
             containing += in;
         }
         EXPECT_EQ(containing, 1);
@@ -51,8 +53,14 @@ checkKuhnTiling()
 
 } // namespace
 
-TEST(SimplexLattice, KuhnTiling2D) { checkKuhnTiling<2>(); }
-TEST(SimplexLattice, KuhnTiling3D) { checkKuhnTiling<3>(); }
+TEST(SimplexLattice, KuhnTiling2D)
+{
+    checkKuhnTiling<2>();
+}
+TEST(SimplexLattice, KuhnTiling3D)
+{
+    checkKuhnTiling<3>();
+}
 
 TEST(SimplexLattice, DenseCountsAndBoundary)
 {
@@ -69,17 +77,20 @@ TEST(SimplexLattice, DenseCountsAndBoundary)
     const auto L2 = SimplexLattice<2>::dense(4);
     EXPECT_EQ(L2.cellCount(), 256u);
     EXPECT_EQ(L2.nodeCount(), 289u);
-    for (std::size_t i = 0; i < L2.nodeCount(); ++i) EXPECT_EQ(L2.nodeCoord(i).z(), 0);
+    for (std::size_t i = 0; i < L2.nodeCount(); ++i)
+        EXPECT_EQ(L2.nodeCoord(i).z(), 0);
 }
 
 TEST(SimplexLattice, GatherSumsEverySlotOnce)
 {
-    const auto L = SimplexLattice<3>::box(4, openvdb::CoordBBox(openvdb::Coord(2), openvdb::Coord(12)));
+    const auto L =
+        SimplexLattice<3>::box(4, openvdb::CoordBBox(openvdb::Coord(2), openvdb::Coord(12)));
     // Put 1 in every slot: the gathered value is the number of blocks touching the node.
     NodeVectors<3> ones = NodeVectors<3>::Ones(3, L.slotNodes().size()), g;
     L.gatherSlots(ones, g);
     EXPECT_NEAR(g.row(0).sum(), Real(L.slotNodes().size()), 0);
-    for (std::size_t i = 0; i < L.nodeCount(); ++i) EXPECT_GE(g(0, i), 1.0);
+    for (std::size_t i = 0; i < L.nodeCount(); ++i)
+        EXPECT_GE(g(0, i), 1.0);
     // Cell corners are consistent with node coordinates.
     for (std::size_t c = 0; c < L.cellCount(); ++c) {
         const auto& cell = L.cells()[c];

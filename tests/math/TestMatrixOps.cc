@@ -31,9 +31,10 @@ checkCof()
             }
         // cofAdjoint is the transpose of the derivative of cof: <G, dcof[H]> = <cofAdjoint(G), H>
         const Mat<D> G = rng.matrix<D>(), H = rng.matrix<D>();
-        const Real lhs = G.cwiseProduct((math::cof(Mat<D>(A + eps * H)) - math::cof(Mat<D>(A - eps * H))) /
-                                        (2 * eps))
-                             .sum();
+        const Real lhs =
+            G.cwiseProduct((math::cof(Mat<D>(A + eps * H)) - math::cof(Mat<D>(A - eps * H))) /
+                           (2 * eps))
+                .sum();
         EXPECT_NEAR(lhs, math::cofAdjoint<D>(A, G).cwiseProduct(H).sum(), 1e-7);
     }
     // cof of a singular matrix is still defined.
@@ -44,8 +45,14 @@ checkCof()
 
 } // namespace
 
-TEST(MatrixOps, Cofactor2D) { checkCof<2>(); }
-TEST(MatrixOps, Cofactor3D) { checkCof<3>(); }
+TEST(MatrixOps, Cofactor2D)
+{
+    checkCof<2>();
+}
+TEST(MatrixOps, Cofactor3D)
+{
+    checkCof<3>();
+}
 
 TEST(MatrixOps, Projection)
 {

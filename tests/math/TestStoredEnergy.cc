@@ -122,12 +122,30 @@ checkVolW()
 
 } // namespace
 
-TEST(StoredEnergy, Wbounded2D) { checkW<2>(); }
-TEST(StoredEnergy, Wbounded3D) { checkW<3>(); }
-TEST(StoredEnergy, InverseDensity2D) { checkInverseW<2>(); }
-TEST(StoredEnergy, InverseDensity3D) { checkInverseW<3>(); }
-TEST(StoredEnergy, ComparisonVolume2D) { checkVolW<2>(); }
-TEST(StoredEnergy, ComparisonVolume3D) { checkVolW<3>(); }
+TEST(StoredEnergy, Wbounded2D)
+{
+    checkW<2>();
+}
+TEST(StoredEnergy, Wbounded3D)
+{
+    checkW<3>();
+}
+TEST(StoredEnergy, InverseDensity2D)
+{
+    checkInverseW<2>();
+}
+TEST(StoredEnergy, InverseDensity3D)
+{
+    checkInverseW<3>();
+}
+TEST(StoredEnergy, ComparisonVolume2D)
+{
+    checkVolW<2>();
+}
+TEST(StoredEnergy, ComparisonVolume3D)
+{
+    checkVolW<3>();
+}
 
 TEST(StoredEnergy, MinimumAlongScaling)
 {

@@ -16,13 +16,17 @@ class RandomSource
 public:
     explicit RandomSource(unsigned seed = 12345) : mEngine(seed) {}
 
-    Real uniform(Real a = -1, Real b = 1) { return std::uniform_real_distribution<Real>(a, b)(mEngine); }
+    Real uniform(Real a = -1, Real b = 1)
+    {
+        return std::uniform_real_distribution<Real>(a, b)(mEngine);
+    }
 
     template <int D> Mat<D> matrix(Real scale = 1)
     {
         Mat<D> A;
         for (int i = 0; i < D; ++i)
-            for (int j = 0; j < D; ++j) A(i, j) = scale * uniform();
+            for (int j = 0; j < D; ++j)
+                A(i, j) = scale * uniform();
         return A;
     }
 
@@ -39,7 +43,8 @@ public:
     {
         Vec<D> v;
         do {
-            for (int i = 0; i < D; ++i) v[i] = uniform();
+            for (int i = 0; i < D; ++i)
+                v[i] = uniform();
         } while (v.norm() < 0.1);
         return v.normalized();
     }
@@ -58,7 +63,8 @@ public:
     {
         const Mat<D> Q = rotation<D>();
         Vec<D> l;
-        for (int i = 0; i < D; ++i) l[i] = uniform(lo, hi);
+        for (int i = 0; i < D; ++i)
+            l[i] = uniform(lo, hi);
         return Q * l.asDiagonal() * Q.transpose();
     }
 

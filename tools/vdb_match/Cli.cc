@@ -297,7 +297,6 @@ struct InputInfo
 {
     std::string path, grid;
     double worldVoxelSize = 0;
-    double bandWidthVoxels = 0;
     size_t activeVoxels = 0;
 };
 
@@ -316,8 +315,8 @@ printHuman(std::ostream& out, const EnergyOptions& o, const InputInfo (&in)[2],
     const char* roles[2] = {"source", "target"};
     for (int i = 0; i < 2; ++i) {
         out << "  " << roles[i] << ":  " << in[i].path << ", grid '" << in[i].grid
-            << "', world voxel " << in[i].worldVoxelSize << ", resampled band "
-            << in[i].bandWidthVoxels << " voxels (" << in[i].activeVoxels << " active)\n";
+            << "', world voxel " << in[i].worldVoxelSize << ", resampled to " << in[i].activeVoxels
+            << " voxels\n";
     }
     out << "  placement: unit = " << placement.scale << " * (world - " << placement.worldOrigin
         << "), margin " << placement.margin << "\n";
@@ -347,7 +346,6 @@ printJson(std::ostream& out, const EnergyOptions& o, const InputInfo (&in)[2],
     auto input = [](const InputInfo& i) {
         return "{\"path\": " + jsonString(i.path) + ", \"grid\": " + jsonString(i.grid) +
                ", \"worldVoxelSize\": " + jsonNumber(i.worldVoxelSize) +
-               ", \"bandWidthVoxels\": " + jsonNumber(i.bandWidthVoxels) +
                ", \"activeVoxels\": " + std::to_string(i.activeVoxels) + "}";
     };
     auto pair = [](const Real* v) {
@@ -435,8 +433,8 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
     openvdb::FloatGrid::ConstPtr sdf[2];
     for (int i = 0; i < 2; ++i) {
         progress("resampling " + in[i].path + " at level " + std::to_string(o.level));
-        openvdb::FloatGrid::Ptr g = resampleToUnitBoxCovering(*inputs[i], placement, o.level,
-                                                              &in[i].bandWidthVoxels, &interrupter);
+        openvdb::FloatGrid::Ptr g = resampleToUnitBox(*inputs[i], placement, o.level,
+                                                      MIN_RESAMPLE_BAND_VOXELS, &interrupter);
         checkInterrupted();
         in[i].activeVoxels = g->activeVoxelCount();
         sdf[i] = g;
@@ -526,12 +524,13 @@ helpText()
     s += std::string(PROGRAM) + " " + VDBMATCH_VERSION +
          ": smooth invertible matching of closed surfaces given as OpenVDB level sets\n\n";
     s += "Usage:\n";
-    s += "  vdb_match energy SOURCE.vdb TARGET.vdb [options]\n";
+    s += "  vdb_match COMMAND [options] ARGS...\n";
     s += "  vdb_match --help | --version\n\n";
     s += "Commands:\n";
-    s += wrapHelp("energy SOURCE TARGET",
-                  "place both level sets in the unit box, resample them at the level and print "
+    s += wrapHelp("energy SOURCE.vdb TARGET.vdb",
+                  "place both level sets in the unit box, resample them at --level and print "
                   "the terms of the matching energy of the identity deformation (phi = Id)");
+    s += "\nOptions of energy, as --name VALUE or --name=VALUE.\n";
     const std::vector<Option> table = energyOptionTable();
     std::string group;
     for (const Option& opt : table) {

@@ -56,7 +56,8 @@ namespace {
 throwOutside(const char* which, const Real* x, int d)
 {
     std::ostringstream os;
-    for (int a = 0; a < d; ++a) os << (a ? ", " : "") << x[a];
+    for (int a = 0; a < d; ++a)
+        os << (a ? ", " : "") << x[a];
     OPENVDB_THROW(openvdb::ValueError, "Energy: the fields of "
                                            << which << " do not cover the point (" << os.str()
                                            << "); extend the signed distance grid");
@@ -92,8 +93,10 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
         const Real invSide = 1.0 / side;
         const Real volume = INV_FACTORIAL * std::pow(side, D);
         Vec<D> origin;
-        for (int a = 0; a < D; ++a) origin[a] = cell.origin[a] * h;
-        for (int k = 0; k < NC; ++k) uc[k] = u.col(cell.corners[k]);
+        for (int a = 0; a < D; ++a)
+            origin[a] = cell.origin[a] * h;
+        for (int k = 0; k < NC; ++k)
+            uc[k] = u.col(cell.corners[k]);
         const int32_t* slots = L.cellSlots().data() + ci * NC;
 
         for (std::size_t p = 0; p < paths.size(); ++p) {
@@ -161,7 +164,8 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
                 // y = x + mean(u_m). Everything is multiplied by |T|.
                 auto& G = *perSlot;
                 const Vec<D> share = (volume / (D + 1)) * dy;
-                for (int m = 0; m <= D; ++m) G.col(slots[path[m]]) += share;
+                for (int m = 0; m <= D; ++m)
+                    G.col(slots[path[m]]) += share;
                 for (int m = 1; m <= D; ++m) {
                     const Vec<D> c = (volume * invSide) * dg.dA.col(axis[m]);
                     G.col(slots[path[m]]) += c;
@@ -197,12 +201,15 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
             evaluateBlock<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr);
     };
     const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);
-    if (threaded) tbb::parallel_for(range, body);
-    else body(range);
+    if (threaded)
+        tbb::parallel_for(range, body);
+    else
+        body(range);
 
     EnergyTerms sum;
     if (!interrupted)
-        for (const auto& p : partial) sum += p;
+        for (const auto& p : partial)
+            sum += p;
     if (terms) *terms = sum;
     if (interrupted) {
         if (gradient) gradient->setZero(D, L.nodeCount());
@@ -210,8 +217,10 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
     }
     const Real e = sum.total();
     if constexpr (Grad) {
-        if (std::isfinite(e)) L.gatherSlots(perSlot, *gradient, threaded);
-        else gradient->setZero(D, L.nodeCount());
+        if (std::isfinite(e))
+            L.gatherSlots(perSlot, *gradient, threaded);
+        else
+            gradient->setZero(D, L.nodeCount());
     }
     return e;
 }
@@ -258,10 +267,13 @@ Energy<D>::minJacobianDeterminant(const NodeVectors<D>& u, bool threaded) const
         }
     };
     const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);
-    if (threaded) tbb::parallel_for(range, body);
-    else body(range);
+    if (threaded)
+        tbb::parallel_for(range, body);
+    else
+        body(range);
     Real m = INF;
-    for (Real v : blockMin) m = std::min(m, v);
+    for (Real v : blockMin)
+        m = std::min(m, v);
     return m;
 }
 

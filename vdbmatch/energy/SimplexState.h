@@ -1,7 +1,8 @@
 /// @file SimplexState.h
 /// @brief Everything the energy densities need on one simplex: the constant deformation gradient
-///        A = D phi, its cofactor, determinant and inverse B = cof A^T / det A (eq:inverseIntegral),
-///        the band weights and the two surface frames, plus the accumulators of the derivatives.
+///        A = D phi, its cofactor, determinant and inverse B = cof A^T / det A
+///        (eq:inverseIntegral), the band weights and the two surface frames, plus the accumulators
+///        of the derivatives.
 #pragma once
 
 #include <vdbmatch/Types.h>
@@ -14,10 +15,10 @@ namespace energy {
 /// Kinematics of one simplex. Only meaningful for J > 0 (the assembly returns +inf otherwise).
 template <int D> struct SimplexKinematics
 {
-    Mat<D> A;  ///< D phi
-    Mat<D> C;  ///< cof A
-    Mat<D> B;  ///< A^{-1} = C^T / J
-    Real J;    ///< det A
+    Mat<D> A; ///< D phi
+    Mat<D> C; ///< cof A
+    Mat<D> B; ///< A^{-1} = C^T / J
+    Real J;   ///< det A
 
     explicit SimplexKinematics(const Mat<D>& a) : A(a), C(math::cof(a))
     {
@@ -29,9 +30,9 @@ template <int D> struct SimplexKinematics
 /// The geometry seen by one quadrature point x with deformed position y = phi(x).
 template <int D> struct PointGeometry
 {
-    Real eta1 = 0;           ///< eta_sigma(d1(x))
-    Real eta2 = 0;           ///< eta_sigma(d2(y))
-    Real eta2Derivative = 0; ///< eta_sigma'(d2(y))
+    Real eta1 = 0;                  ///< eta_sigma(d1(x))
+    Real eta2 = 0;                  ///< eta_sigma(d2(y))
+    Real eta2Derivative = 0;        ///< eta_sigma'(d2(y))
     kinematics::SurfaceFrame<D> f1; ///< shape 1 at x
     kinematics::SurfaceFrame<D> f2; ///< shape 2 at y
 };

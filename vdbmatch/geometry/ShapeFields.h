@@ -37,9 +37,10 @@
 namespace vdbmatch {
 
 /// Default τ of eq:defSi in 1/length (Omega units).
-/// @note The paper gives no value for τ; 0.1 bounds the factor S^{-1/2} of Λ [eq:lambdadef] by
-/// about 3.2 on flat parts of shapes that have curvatures of order 1-10 in the unit box.
-constexpr Real DEFAULT_SHAPE_OPERATOR_TAU = 0.1;
+/// @note The paper gives no value for τ. With 1, curvature radii larger than the unit box count
+/// as flat, and the factor S^{-1/2} of Λ [eq:lambdadef] stays <= 1 on flat parts of the shapes,
+/// whose curvatures in the unit box are of order 1-100. EnergyParameters::tau uses this value.
+constexpr Real DEFAULT_SHAPE_OPERATOR_TAU = 1.0;
 
 /// Options for the computation of the shape fields.
 struct ShapeFieldOptions

@@ -254,7 +254,7 @@ fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, co
         if (!it.isVoxelValue() || !box.contains(ijk)) continue;
         const size_t i = box.index(ijk);
         state[i] = KNOWN;
-        dist[i] = float(std::abs(*it) / h);
+        dist[i] = float(std::abs(double(*it)) / h);
         const int32_t poly = indexAcc.getValue(ijk);
         closest[i] = poly >= 0 && poly < polygonCount ? poly : -1;
         frontier.push_back(i);
@@ -337,18 +337,18 @@ fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, co
         for (int y = first[1]; y <= last; y += LeafT::DIM)
             for (int x = first[0]; x <= last; x += LeafT::DIM)
                 leaves.push_back(grid.tree().touchLeaf(openvdb::Coord(x, y, z)));
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, leaves.size()),
-                      [&](const tbb::blocked_range<size_t>& r) {
-                          for (size_t l = r.begin(); l != r.end(); ++l) {
-                              LeafT& leaf = *leaves[l];
-                              for (openvdb::Index off = 0; off < LeafT::SIZE; ++off) {
-                                  const openvdb::Coord ijk = leaf.offsetToGlobalCoord(off);
-                                  if (!box.contains(ijk) || leaf.isValueOn(off)) continue;
-                                  const float sign = leaf.getValue(off) < 0.0f ? -1.0f : 1.0f;
-                                  leaf.setValueOn(off, sign * float(dist[box.index(ijk)] * h));
-                              }
-                          }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<size_t>(0, leaves.size()), [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t l = r.begin(); l != r.end(); ++l) {
+                LeafT& leaf = *leaves[l];
+                for (openvdb::Index off = 0; off < LeafT::SIZE; ++off) {
+                    const openvdb::Coord ijk = leaf.offsetToGlobalCoord(off);
+                    if (!box.contains(ijk) || leaf.isValueOn(off)) continue;
+                    const float sign = leaf.getValue(off) < 0.0f ? -1.0f : 1.0f;
+                    leaf.setValueOn(off, sign * float(double(dist[box.index(ijk)]) * h));
+                }
+            }
+        });
     return true;
 }
 
@@ -357,18 +357,19 @@ fillNodeBox(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, co
 UnitBoxPlacement
 UnitBoxPlacement::fromWorldBox(const openvdb::BBoxd& worldBox, double margin)
 {
-    if (!(margin >= 0.0 && margin < 0.5)) {
+    // Finiteness is tested first: ordered comparisons with NaN would raise FE_INVALID.
+    if (!std::isfinite(margin) || margin < 0.0 || margin >= 0.5) {
         std::ostringstream s;
         s << "UnitBoxPlacement::fromWorldBox: margin must be in [0, 0.5), got " << margin;
         OPENVDB_THROW(openvdb::ValueError, s.str());
     }
-    const openvdb::Vec3d extents = worldBox.extents();
-    const double side = std::max({extents[0], extents[1], extents[2]});
-    bool finite = true;
+    bool valid = true;
     for (int a = 0; a < 3; ++a) {
-        finite = finite && std::isfinite(worldBox.min()[a]) && std::isfinite(worldBox.max()[a]);
+        valid = valid && std::isfinite(worldBox.min()[a]) && std::isfinite(worldBox.max()[a]);
     }
-    if (!finite || worldBox.empty() || !(side > 0.0)) {
+    const openvdb::Vec3d extents = valid ? worldBox.extents() : openvdb::Vec3d(0.0);
+    const double side = std::max({extents[0], extents[1], extents[2]});
+    if (!valid || worldBox.empty() || !(side > 0.0)) {
         std::ostringstream s;
         s << "UnitBoxPlacement::fromWorldBox: expected a non-degenerate finite box, got "
           << worldBox;
@@ -423,12 +424,12 @@ resampleToUnitBox(const openvdb::FloatGrid& levelSet, const UnitBoxPlacement& pl
                       "resampleToUnitBox: level must be in [" + std::to_string(MIN_LEVEL) + ", " +
                           std::to_string(MAX_LEVEL) + "], got " + std::to_string(level));
     }
-    if (!(bandWidthVoxels >= MIN_RESAMPLE_BAND_VOXELS) || !std::isfinite(bandWidthVoxels)) {
+    if (!std::isfinite(bandWidthVoxels) || bandWidthVoxels < MIN_RESAMPLE_BAND_VOXELS) {
         OPENVDB_THROW(openvdb::ValueError, "resampleToUnitBox: bandWidthVoxels must be finite and "
                                            ">= 3, got " +
                                                std::to_string(bandWidthVoxels));
     }
-    if (!(placement.scale > 0.0) || !std::isfinite(placement.scale)) {
+    if (!std::isfinite(placement.scale) || placement.scale <= 0.0) {
         OPENVDB_THROW(openvdb::ValueError, "resampleToUnitBox: invalid placement scale " +
                                                std::to_string(placement.scale));
     }

@@ -26,13 +26,13 @@ namespace kinematics {
 
 template <int D> struct SurfaceFrame
 {
-    Real d;        ///< signed distance
-    Vec<D> n;      ///< unit normal
-    Mat<D> P;      ///< 1 - n (x) n
-    Mat<D> Tp;     ///< P S^{1/2} P
-    Mat<D> Tm;     ///< (Tp + n (x) n)^{-1} - n (x) n
-    Real nLength;  ///< |interpolated n| (kept for the adjoint)
-    Mat<D> Minv;   ///< (Tp + n (x) n)^{-1} (kept for the adjoint)
+    Real d;       ///< signed distance
+    Vec<D> n;     ///< unit normal
+    Mat<D> P;     ///< 1 - n (x) n
+    Mat<D> Tp;    ///< P S^{1/2} P
+    Mat<D> Tm;    ///< (Tp + n (x) n)^{-1} - n (x) n
+    Real nLength; ///< |interpolated n| (kept for the adjoint)
+    Mat<D> Minv;  ///< (Tp + n (x) n)^{-1} (kept for the adjoint)
 };
 
 /// Derivatives of an energy with respect to the members of a SurfaceFrame, treated as
@@ -80,7 +80,8 @@ frameAdjoint(const RawFields<D>& raw, const RawFieldDerivatives<D>& deriv, const
     // n = n~ / |n~|
     const Vec<D> aRawN = (a.n - f.n * f.n.dot(a.n)) / f.nLength;
     Vec<D> g = a.d * deriv.dd + deriv.dn.transpose() * aRawN;
-    for (int k = 0; k < D; ++k) g[k] += aR.cwiseProduct(deriv.dR[k]).sum();
+    for (int k = 0; k < D; ++k)
+        g[k] += aR.cwiseProduct(deriv.dR[k]).sum();
     return g;
 }
 

@@ -59,7 +59,8 @@ Vec<D>
 SimplexLattice<D>::nodePosition(std::size_t i) const
 {
     Vec<D> x;
-    for (int a = 0; a < D; ++a) x[a] = mNodeCoords[i][a] * mH;
+    for (int a = 0; a < D; ++a)
+        x[a] = mNodeCoords[i][a] * mH;
     return x;
 }
 
@@ -68,7 +69,8 @@ NodeVectors<D>
 SimplexLattice<D>::nodePositions() const
 {
     NodeVectors<D> X(D, nodeCount());
-    for (std::size_t i = 0; i < nodeCount(); ++i) X.col(i) = nodePosition(i);
+    for (std::size_t i = 0; i < nodeCount(); ++i)
+        X.col(i) = nodePosition(i);
     return X;
 }
 
@@ -104,9 +106,9 @@ SimplexLattice<D>
 SimplexLattice<D>::box(int level, const openvdb::CoordBBox& bbox)
 {
     if (level < MIN_LEVEL || level > MAX_LEVEL)
-        OPENVDB_THROW(openvdb::ValueError,
-                      "SimplexLattice::box: level must be in [" << MIN_LEVEL << ", " << MAX_LEVEL
-                                                                << "], got " << level);
+        OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::box: level must be in ["
+                                               << MIN_LEVEL << ", " << MAX_LEVEL << "], got "
+                                               << level);
     const int n = 1 << level;
     openvdb::Coord lo = openvdb::Coord::maxComponent(bbox.min(), openvdb::Coord(0));
     openvdb::Coord hi = openvdb::Coord::minComponent(bbox.max(), openvdb::Coord(n - 1));
@@ -123,9 +125,9 @@ SimplexLattice<D>
 SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid::ConstPtr>& masks)
 {
     if (level < MIN_LEVEL || level > MAX_LEVEL)
-        OPENVDB_THROW(openvdb::ValueError,
-                      "SimplexLattice::fromCellMasks: level must be in ["
-                          << MIN_LEVEL << ", " << MAX_LEVEL << "], got " << level);
+        OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::fromCellMasks: level must be in ["
+                                               << MIN_LEVEL << ", " << MAX_LEVEL << "], got "
+                                               << level);
     SimplexLattice L;
     L.mLevel = level;
     L.mH = 1.0 / Real(1 << level);
@@ -148,10 +150,9 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
                 }
                 for (int a = 0; a < D; ++a) {
                     if (c.origin[a] < 0 || c.origin[a] + side > n)
-                        OPENVDB_THROW(openvdb::ValueError,
-                                      "SimplexLattice::fromCellMasks: cell " << c.origin
-                                                                             << " of side " << side
-                                                                             << " lies outside the unit box");
+                        OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::fromCellMasks: cell "
+                                                               << c.origin << " of side " << side
+                                                               << " lies outside the unit box");
                 }
                 c.log2Size = int(s);
                 L.mCells.push_back(c);
@@ -172,7 +173,8 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
     {
         auto acc = nodeMask->getAccessor();
         for (const Cell& c : L.mCells)
-            for (int k = 0; k < CORNERS; ++k) acc.setValueOn(cornerCoord(c, k));
+            for (int k = 0; k < CORNERS; ++k)
+                acc.setValueOn(cornerCoord(c, k));
     }
     L.mNodeIndex = openvdb::Int32Grid::create(-1);
     L.mNodeIndex->tree().topologyUnion(nodeMask->tree());
@@ -214,30 +216,33 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
         L.mBlocks[bi].slotEnd = slots;
     }
     L.mSlotNodes.resize(slots);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.mBlocks.size()),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t bi = r.begin(); bi != r.end(); ++bi) {
-                              const Block& b = L.mBlocks[bi];
-                              const auto& nodes = blockNodes[bi];
-                              std::copy(nodes.begin(), nodes.end(), L.mSlotNodes.begin() + b.slotBegin);
-                              for (std::size_t ci = b.cellBegin; ci < b.cellEnd; ++ci) {
-                                  for (int k = 0; k < CORNERS; ++k) {
-                                      auto it = std::lower_bound(nodes.begin(), nodes.end(),
-                                                                 L.mCells[ci].corners[k]);
-                                      L.mCellSlots[ci * CORNERS + k] =
-                                          int32_t(b.slotBegin + (it - nodes.begin()));
-                                  }
-                              }
-                          }
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, L.mBlocks.size()),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t bi = r.begin(); bi != r.end(); ++bi) {
+                const Block& b = L.mBlocks[bi];
+                const auto& nodes = blockNodes[bi];
+                std::copy(nodes.begin(), nodes.end(), L.mSlotNodes.begin() + b.slotBegin);
+                for (std::size_t ci = b.cellBegin; ci < b.cellEnd; ++ci) {
+                    for (int k = 0; k < CORNERS; ++k) {
+                        auto it =
+                            std::lower_bound(nodes.begin(), nodes.end(), L.mCells[ci].corners[k]);
+                        L.mCellSlots[ci * CORNERS + k] =
+                            int32_t(b.slotBegin + (it - nodes.begin()));
+                    }
+                }
+            }
+        });
 
     // 4. Gather lists: for each node, its slots in block order.
     L.mGatherBegin.assign(L.nodeCount() + 1, 0);
-    for (int32_t node : L.mSlotNodes) ++L.mGatherBegin[node + 1];
+    for (int32_t node : L.mSlotNodes)
+        ++L.mGatherBegin[node + 1];
     std::partial_sum(L.mGatherBegin.begin(), L.mGatherBegin.end(), L.mGatherBegin.begin());
     L.mGatherSlots.resize(slots);
     std::vector<std::size_t> fill(L.mGatherBegin.begin(), L.mGatherBegin.end() - 1);
-    for (std::size_t s = 0; s < slots; ++s) L.mGatherSlots[fill[L.mSlotNodes[s]]++] = int32_t(s);
+    for (std::size_t s = 0; s < slots; ++s)
+        L.mGatherSlots[fill[L.mSlotNodes[s]]++] = int32_t(s);
     return L;
 }
 
@@ -256,8 +261,10 @@ SimplexLattice<D>::gatherSlots(const NodeVectors<D>& perSlot, NodeVectors<D>& ou
         }
     };
     const tbb::blocked_range<std::size_t> range(0, nodeCount(), 1024);
-    if (threaded) tbb::parallel_for(range, body);
-    else body(range);
+    if (threaded)
+        tbb::parallel_for(range, body);
+    else
+        body(range);
 }
 
 template <int D>
@@ -277,7 +284,8 @@ SimplexLattice<D>::toGrid(const NodeVectors<D>& u) const
         for (auto v = leaf->beginValueOn(); v; ++v) {
             const int32_t i = acc.getValue(v.getCoord());
             openvdb::Vec3d value(0.0);
-            for (int a = 0; a < D; ++a) value[a] = u(a, i);
+            for (int a = 0; a < D; ++a)
+                value[a] = u(a, i);
             v.setValue(value);
         }
     }
@@ -297,7 +305,8 @@ SimplexLattice<D>::fromGrid(const openvdb::Vec3dGrid& grid) const
     for (std::size_t i = 0; i < nodeCount(); ++i) {
         openvdb::Vec3d value;
         if (acc.probeValue(mNodeCoords[i], value))
-            for (int a = 0; a < D; ++a) u(a, i) = value[a];
+            for (int a = 0; a < D; ++a)
+                u(a, i) = value[a];
     }
     return u;
 }

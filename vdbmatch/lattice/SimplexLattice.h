@@ -36,14 +36,14 @@ template <int D> using NodeVectors = Eigen::Matrix<Real, D, Eigen::Dynamic>;
 template <int D> class SimplexLattice
 {
 public:
-    static constexpr int CORNERS = 1 << D;              ///< nodes per cell
-    static constexpr int SIMPLICES = D == 2 ? 2 : 6;    ///< Kuhn simplices per cell
+    static constexpr int CORNERS = 1 << D;           ///< nodes per cell
+    static constexpr int SIMPLICES = D == 2 ? 2 : 6; ///< Kuhn simplices per cell
 
     struct Cell
     {
-        openvdb::Coord origin;                  ///< minimum corner, index coordinates
-        int log2Size;                           ///< cell side = 2^log2Size h
-        std::array<int32_t, CORNERS> corners;   ///< node index of corner with bit a = +side along a
+        openvdb::Coord origin;                ///< minimum corner, index coordinates
+        int log2Size;                         ///< cell side = 2^log2Size h
+        std::array<int32_t, CORNERS> corners; ///< node index of corner with bit a = +side along a
     };
 
     struct Block
@@ -91,7 +91,8 @@ public:
 
     /// Sums per-slot vectors into per-node vectors in a fixed order (block order), in parallel
     /// over nodes: out.col(n) = sum of perSlot.col(s) over the slots s of node n.
-    void gatherSlots(const NodeVectors<D>& perSlot, NodeVectors<D>& out, bool threaded = true) const;
+    void gatherSlots(const NodeVectors<D>& perSlot, NodeVectors<D>& out,
+                     bool threaded = true) const;
 
     /// The displacement u as a sparse OpenVDB vector grid on the nodes (voxel size h, voxel
     /// (i,j,k) = node (i,j,k), z component 0 in 2D), named "displacement", vector type

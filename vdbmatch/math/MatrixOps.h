@@ -57,7 +57,8 @@ cofAdjoint(const Mat<D>& A, const Mat<D>& G)
         R << G(1, 1), -G(1, 0), -G(0, 1), G(0, 0);
         return R;
     } else {
-        // cof(A)_{ij} = 1/2 eps_{imn} eps_{jpq} A_{mp} A_{nq}; d cof_{ij}/dA_{mp} = eps_{imn} eps_{jpq} A_{nq}
+        // cof(A)_{ij} = 1/2 eps_{imn} eps_{jpq} A_{mp} A_{nq}; d cof_{ij}/dA_{mp} = eps_{imn}
+        // eps_{jpq} A_{nq}
         // => dE/dA_{mp} = sum_{ij} G_ij eps_imn eps_jpq A_nq = cof-like bilinear form; computed
         // by the identity dE/dA = sum over i,j of G_ij * d cof_ij / dA, using cof(A + B) expansion.
         Mat<D> R = Mat<D>::Zero();

@@ -37,8 +37,10 @@ template <int D>
 inline Real
 frobeniusPowerDp1(Real s)
 {
-    if constexpr (D == 2) return s * std::sqrt(s);
-    else return s * s;
+    if constexpr (D == 2)
+        return s * std::sqrt(s);
+    else
+        return s * s;
 }
 
 /// |A|^{d-1} (the factor in d/dA |A|^{d+1}/(d+1) = |A|^{d-1} A).
@@ -46,8 +48,10 @@ template <int D>
 inline Real
 frobeniusPowerDm1(Real s)
 {
-    if constexpr (D == 2) return std::sqrt(s);
-    else return s;
+    if constexpr (D == 2)
+        return std::sqrt(s);
+    else
+        return s;
 }
 
 /// W of eq:Wbounded, given A and its determinant.
@@ -69,7 +73,8 @@ W(const Mat<D>& A)
     return W<D>(A, A.determinant());
 }
 
-/// W of eq:Wbounded and dW/dA = |A|^{d-1} A + sqrt2 d^{(d-1)/2} (det A - 2)/sqrt(1+(det A-2)^2) cof A.
+/// W of eq:Wbounded and dW/dA = |A|^{d-1} A + sqrt2 d^{(d-1)/2} (det A - 2)/sqrt(1+(det A-2)^2) cof
+/// A.
 template <int D>
 inline Real
 W(const Mat<D>& A, Mat<D>& dW)

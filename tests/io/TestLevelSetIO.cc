@@ -1,0 +1,303 @@
+/// @file TestLevelSetIO.cc
+/// @brief Tests of readLevelSet (grid selection, every rejected kind of input and its exception
+/// type and message), checkInputLevelSet, and writeGridsAtomically.
+
+#include <vdbmatch/io/LevelSetIO.h>
+
+#include <gtest/gtest.h>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/LevelSetSphere.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <string>
+#include <unistd.h>
+
+using namespace vdbmatch;
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr float VOXEL = 0.1f;
+constexpr float RADIUS = 1.0f;
+
+/// A scratch directory of its own for each test, removed at the end.
+class ScratchDir
+{
+public:
+    ScratchDir()
+    {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        mPath = fs::temp_directory_path() / ("vdbmatch-" + std::string(info->test_suite_name()) +
+                                             "-" + info->name() + "-" + std::to_string(::getpid()));
+        fs::remove_all(mPath);
+        fs::create_directories(mPath);
+    }
+    ~ScratchDir()
+    {
+        std::error_code ec;
+        fs::remove_all(mPath, ec);
+    }
+    std::string file(const std::string& name) const { return (mPath / name).string(); }
+    const fs::path& path() const { return mPath; }
+
+private:
+    fs::path mPath;
+};
+
+openvdb::FloatGrid::Ptr
+sphere(const std::string& name = "surface", float radius = RADIUS)
+{
+    auto grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        radius, openvdb::Vec3f(0.2f, -0.1f, 0.3f), VOXEL);
+    grid->setName(name);
+    return grid;
+}
+
+void
+write(const std::string& path, const openvdb::GridPtrVec& grids)
+{
+    openvdb::io::File file(path);
+    file.write(grids);
+    file.close();
+}
+
+/// Runs f and returns the message of the exception of type E it throws ("" if none).
+template <typename E, typename F>
+std::string
+messageOf(F&& f)
+{
+    try {
+        f();
+    } catch (const E& e) {
+        return e.what();
+    }
+    return "";
+}
+
+bool
+contains(const std::string& s, const std::string& part)
+{
+    return s.find(part) != std::string::npos;
+}
+
+class LevelSetIOTest : public ::testing::Test
+{
+protected:
+    void SetUp() override { openvdb::initialize(); }
+    ScratchDir mDir;
+};
+
+} // namespace
+
+TEST_F(LevelSetIOTest, ReadsTheOnlyFloatGrid)
+{
+    const auto original = sphere();
+    // A vector grid beside it is not a candidate.
+    auto vectors = openvdb::Vec3SGrid::create();
+    vectors->setName("velocity");
+    write(mDir.file("a.vdb"), {original, vectors});
+    const auto grid = readLevelSet(mDir.file("a.vdb"));
+    ASSERT_TRUE(grid);
+    EXPECT_EQ(grid->getName(), "surface");
+    EXPECT_EQ(grid->activeVoxelCount(), original->activeVoxelCount());
+    EXPECT_EQ(grid->getGridClass(), openvdb::GRID_LEVEL_SET);
+}
+
+TEST_F(LevelSetIOTest, ReadsANamedGridAmongSeveral)
+{
+    write(mDir.file("two.vdb"), {sphere("outer", 1.0f), sphere("inner", 0.5f)});
+    const auto inner = readLevelSet(mDir.file("two.vdb"), "inner");
+    EXPECT_EQ(inner->getName(), "inner");
+    EXPECT_EQ(inner->activeVoxelCount(), sphere("inner", 0.5f)->activeVoxelCount());
+}
+
+TEST_F(LevelSetIOTest, ReadsAnUnnamedGrid)
+{
+    write(mDir.file("unnamed.vdb"), {sphere("")});
+    EXPECT_TRUE(readLevelSet(mDir.file("unnamed.vdb")));
+}
+
+TEST_F(LevelSetIOTest, AcceptsRotatedAndTranslatedTransforms)
+{
+    auto grid = sphere();
+    openvdb::math::Transform::Ptr xform = openvdb::math::Transform::createLinearTransform(VOXEL);
+    xform->preRotate(0.4, openvdb::math::Z_AXIS);
+    xform->postTranslate(openvdb::Vec3d(1.0, -2.0, 0.5));
+    grid->setTransform(xform);
+    write(mDir.file("rotated.vdb"), {grid});
+    EXPECT_TRUE(readLevelSet(mDir.file("rotated.vdb")));
+}
+
+TEST_F(LevelSetIOTest, MissingFileIsAnIoError)
+{
+    const std::string msg =
+        messageOf<openvdb::IoError>([&] { readLevelSet(mDir.file("nothere.vdb")); });
+    EXPECT_TRUE(contains(msg, "nothere.vdb")) << msg;
+    EXPECT_TRUE(contains(msg, "does not exist")) << msg;
+    EXPECT_TRUE(contains(messageOf<openvdb::IoError>([&] { readLevelSet(mDir.path().string()); }),
+                         "is a directory"));
+}
+
+TEST_F(LevelSetIOTest, NonVdbAndTruncatedFilesAreIoErrors)
+{
+    {
+        std::ofstream text(mDir.file("text.vdb"));
+        text << "not a vdb file\n";
+    }
+    EXPECT_TRUE(contains(messageOf<openvdb::IoError>([&] { readLevelSet(mDir.file("text.vdb")); }),
+                         "cannot be read as a VDB file"));
+
+    write(mDir.file("whole.vdb"), {sphere()});
+    const auto size = fs::file_size(mDir.file("whole.vdb"));
+    for (const double fraction : {0.1, 0.5, 0.9}) {
+        fs::copy_file(mDir.file("whole.vdb"), mDir.file("cut.vdb"),
+                      fs::copy_options::overwrite_existing);
+        fs::resize_file(mDir.file("cut.vdb"), std::uintmax_t(double(size) * fraction));
+        EXPECT_THROW(readLevelSet(mDir.file("cut.vdb")), openvdb::IoError) << fraction;
+    }
+}
+
+TEST_F(LevelSetIOTest, NoFloatGridIsATypeError)
+{
+    auto vectors = openvdb::Vec3SGrid::create();
+    vectors->setName("velocity");
+    write(mDir.file("vectors.vdb"), {vectors});
+    const std::string msg =
+        messageOf<openvdb::TypeError>([&] { readLevelSet(mDir.file("vectors.vdb")); });
+    EXPECT_TRUE(contains(msg, "no float grid")) << msg;
+    EXPECT_TRUE(contains(msg, "'velocity' (vec3s)")) << msg;
+    EXPECT_THROW(readLevelSet(mDir.file("vectors.vdb"), "velocity"), openvdb::TypeError);
+}
+
+TEST_F(LevelSetIOTest, SeveralFloatGridsNeedAName)
+{
+    write(mDir.file("two.vdb"), {sphere("outer", 1.0f), sphere("inner", 0.5f)});
+    const std::string msg =
+        messageOf<openvdb::ValueError>([&] { readLevelSet(mDir.file("two.vdb")); });
+    EXPECT_TRUE(contains(msg, "several float grids")) << msg;
+    EXPECT_TRUE(contains(msg, "'outer'")) << msg;
+    EXPECT_TRUE(contains(msg, "'inner'")) << msg;
+
+    const std::string missing =
+        messageOf<openvdb::ValueError>([&] { readLevelSet(mDir.file("two.vdb"), "middle"); });
+    EXPECT_TRUE(contains(missing, "no grid named 'middle'")) << missing;
+}
+
+TEST_F(LevelSetIOTest, RejectsAFogVolume)
+{
+    auto fog = sphere("density");
+    fog->setGridClass(openvdb::GRID_FOG_VOLUME);
+    write(mDir.file("fog.vdb"), {fog});
+    const std::string msg =
+        messageOf<openvdb::ValueError>([&] { readLevelSet(mDir.file("fog.vdb")); });
+    EXPECT_TRUE(contains(msg, "fog.vdb")) << msg;
+    EXPECT_TRUE(contains(msg, "not a level set (grid class 'fog volume')")) << msg;
+}
+
+TEST_F(LevelSetIOTest, RejectsNonUniformVoxels)
+{
+    auto grid = sphere();
+    openvdb::math::Transform::Ptr scaled = openvdb::math::Transform::createLinearTransform(VOXEL);
+    scaled->postScale(openvdb::Vec3d(1.0, 1.0, 2.0));
+    grid->setTransform(scaled);
+    const std::string msg =
+        messageOf<openvdb::ValueError>([&] { checkInputLevelSet(*grid, "scaled"); });
+    EXPECT_TRUE(contains(msg, "non-uniform voxels")) << msg;
+
+    openvdb::math::Transform::Ptr sheared = openvdb::math::Transform::createLinearTransform(VOXEL);
+    sheared->preShear(0.5, openvdb::math::X_AXIS, openvdb::math::Y_AXIS);
+    grid->setTransform(sheared);
+    EXPECT_THROW(checkInputLevelSet(*grid, "sheared"), openvdb::ValueError);
+}
+
+TEST_F(LevelSetIOTest, RejectsNonFiniteValues)
+{
+    for (const float bad :
+         {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        auto grid = sphere();
+        // An active voxel and, separately, an inactive one inside a leaf.
+        auto active = grid->deepCopy();
+        active->tree().setValueOn(openvdb::Coord(12, 0, 0), bad);
+        const std::string msg =
+            messageOf<openvdb::ValueError>([&] { checkInputLevelSet(*active, "nan"); });
+        EXPECT_TRUE(contains(msg, "non-finite")) << msg;
+        auto inactive = grid->deepCopy();
+        inactive->tree().setValueOff(openvdb::Coord(2, -1, 3), bad);
+        EXPECT_THROW(checkInputLevelSet(*inactive, "nan"), openvdb::ValueError);
+    }
+}
+
+TEST_F(LevelSetIOTest, RejectsEmptyGridsAndGridsWithoutZeroCrossing)
+{
+    auto empty = openvdb::FloatGrid::create(3 * VOXEL);
+    empty->setGridClass(openvdb::GRID_LEVEL_SET);
+    empty->setTransform(openvdb::math::Transform::createLinearTransform(VOXEL));
+    write(mDir.file("empty.vdb"), {empty});
+    EXPECT_TRUE(contains(
+        messageOf<openvdb::ValueError>([&] { readLevelSet(mDir.file("empty.vdb")); }), "empty"));
+
+    auto positive = sphere();
+    for (auto it = positive->tree().beginValueOn(); it; ++it)
+        it.setValue(std::abs(*it) + VOXEL);
+    EXPECT_TRUE(
+        contains(messageOf<openvdb::ValueError>([&] { checkInputLevelSet(*positive, "pos"); }),
+                 "no zero crossing"));
+}
+
+TEST_F(LevelSetIOTest, RejectsOpenSurfacesAndFlippedSigns)
+{
+    // A sphere clipped by the plane x = 0: the zero crossing reaches the edge of the band.
+    auto clipped = sphere();
+    for (auto it = clipped->tree().beginValueOn(); it; ++it) {
+        if (it.getCoord()[0] > 2) it.setValueOff();
+    }
+    const std::string msg =
+        messageOf<openvdb::ValueError>([&] { checkInputLevelSet(*clipped, "clipped"); });
+    EXPECT_TRUE(contains(msg, "open or clipped")) << msg;
+
+    auto flipped = sphere();
+    for (auto it = flipped->tree().beginValueOn(); it; ++it)
+        it.setValue(-*it);
+    EXPECT_THROW(checkInputLevelSet(*flipped, "flipped"), openvdb::ValueError);
+}
+
+TEST_F(LevelSetIOTest, AcceptsAThinBand)
+{
+    // A band of 1.5 voxels on each side (the outer layer at >= 0.5 voxel) is still closed.
+    auto thin = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+        RADIUS, openvdb::Vec3f(0.0f), VOXEL, /*halfWidth=*/1.5f);
+    EXPECT_NO_THROW(checkInputLevelSet(*thin, "thin"));
+}
+
+TEST_F(LevelSetIOTest, WritesAtomically)
+{
+    const std::string path = mDir.file("out.vdb");
+    openvdb::MetaMap meta;
+    meta.insertMeta("creator", openvdb::StringMetadata("vdbmatch test"));
+    writeGridsAtomically(path, {sphere("first")}, meta);
+    EXPECT_EQ(readLevelSet(path)->getName(), "first");
+    // Overwrite, and check that only the output is left in the directory.
+    writeGridsAtomically(path, {sphere("second")}, meta);
+    EXPECT_EQ(readLevelSet(path)->getName(), "second");
+    int files = 0;
+    for (const auto& entry : fs::directory_iterator(mDir.path())) {
+        ++files;
+        EXPECT_EQ(entry.path().filename(), "out.vdb");
+    }
+    EXPECT_EQ(files, 1);
+    openvdb::io::File file(path);
+    file.open();
+    EXPECT_EQ(file.getMetadata()->metaValue<std::string>("creator"), "vdbmatch test");
+}
+
+TEST_F(LevelSetIOTest, FailedWriteLeavesNothing)
+{
+    const std::string path = mDir.file("missing-dir/out.vdb");
+    EXPECT_THROW(writeGridsAtomically(path, {sphere()}, openvdb::MetaMap()), openvdb::IoError);
+    EXPECT_FALSE(fs::exists(path));
+    EXPECT_TRUE(fs::is_empty(mDir.path()));
+}
