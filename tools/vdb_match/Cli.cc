@@ -436,6 +436,7 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
         openvdb::FloatGrid::Ptr g = resampleToUnitBox(*inputs[i], placement, o.level,
                                                       MIN_RESAMPLE_BAND_VOXELS, &interrupter);
         checkInterrupted();
+        if (!g) throw Interrupted{}; // resampleToUnitBox returns null only when interrupted
         in[i].activeVoxels = g->activeVoxelCount();
         sdf[i] = g;
         inputs[i].reset();

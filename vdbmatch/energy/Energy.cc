@@ -38,18 +38,6 @@ EnergyTerms::operator+=(const EnergyTerms& o)
     return *this;
 }
 
-template <int D>
-Energy<D>::Energy(const SimplexLattice<D>& lattice, const FieldSampler<D>& shape1,
-                  const FieldSampler<D>& shape2, const EnergyParameters& params, EnergyKind kind,
-                  Real sigma)
-    : mLattice(&lattice), mShape1(&shape1), mShape2(&shape2), mParams(params), mKind(kind)
-{
-    mParams.validate();
-    mSigma = sigma > 0 ? sigma : mParams.sigmaFactor * lattice.h();
-    mMatchWeight = mParams.cMatch * std::pow(mSigma, -mParams.q);
-    mVolumeWeight = mParams.cVol * std::pow(mSigma, mParams.theta);
-}
-
 namespace {
 
 [[noreturn]] void
@@ -64,6 +52,132 @@ throwOutside(const char* which, const Real* x, int d)
 }
 
 } // namespace
+
+template <int D>
+Energy<D>::Energy(const SimplexLattice<D>& lattice, const FieldSampler<D>& shape1,
+                  const FieldSampler<D>& shape2, const EnergyParameters& params, EnergyKind kind,
+                  Real sigma)
+    : mLattice(&lattice), mShape1(&shape1), mShape2(&shape2), mParams(params), mKind(kind)
+{
+    mParams.validate();
+    mSigma = sigma > 0 ? sigma : mParams.sigmaFactor * lattice.h();
+    mMatchWeight = mParams.cMatch * std::pow(mSigma, -mParams.q);
+    mVolumeWeight = mParams.cVol * std::pow(mSigma, mParams.theta);
+    cacheSourceGeometry();
+}
+
+namespace {
+
+template <int D>
+void
+packSym(const Mat<D>& M, Eigen::Matrix<Real, D*(D + 1) / 2, 1>& out)
+{
+    int k = 0;
+    for (int i = 0; i < D; ++i)
+        for (int j = i; j < D; ++j) out[k++] = M(i, j);
+}
+
+template <int D>
+void
+unpackSym(const Eigen::Matrix<Real, D*(D + 1) / 2, 1>& in, Mat<D>& M)
+{
+    int k = 0;
+    for (int i = 0; i < D; ++i)
+        for (int j = i; j < D; ++j) M(i, j) = M(j, i) = in[k++];
+}
+
+} // namespace
+
+template <int D>
+Vec<D>
+Energy<D>::centroid(std::size_t ci, std::size_t p) const
+{
+    const auto& cell = mLattice->cells()[ci];
+    const Real h = mLattice->h();
+    const Real side = h * Real(1 << cell.log2Size);
+    const auto& path = KuhnSplit<D>::path()[p];
+    Vec<D> x = Vec<D>::Zero(), origin;
+    for (int a = 0; a < D; ++a) origin[a] = cell.origin[a] * h;
+    for (int m = 0; m <= D; ++m)
+        for (int a = 0; a < D; ++a)
+            if (path[m] & (1 << a)) x[a] += 1.0;
+    return origin + x * (side / (D + 1));
+}
+
+template <int D>
+void
+Energy<D>::cacheSourceGeometry()
+{
+    using Lattice = SimplexLattice<D>;
+    const auto& L = *mLattice;
+    const BandWeight band(mSigma);
+    mSourceIndex.assign(L.simplexCount(), -1);
+    // Pass 1, parallel over blocks: which simplices lie in the band of M1.
+    std::vector<std::size_t> count(L.blocks().size(), 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.blocks().size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                              const auto& block = L.blocks()[b];
+                              for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci)
+                                  for (std::size_t p = 0; p < Lattice::SIMPLICES; ++p) {
+                                      const Vec<D> x = centroid(ci, p);
+                                      Real d1;
+                                      if (!mShape1->sampleDistance(x, d1))
+                                          throwOutside("shape 1", x.data(), D);
+                                      if (band.inBand(d1)) {
+                                          mSourceIndex[ci * Lattice::SIMPLICES + p] = 0;
+                                          ++count[b];
+                                      }
+                                  }
+                          }
+                      });
+    // Pass 2: slots in block order, then the frames, in parallel.
+    std::vector<std::size_t> offset(count.size() + 1, 0);
+    for (std::size_t b = 0; b < count.size(); ++b) offset[b + 1] = offset[b] + count[b];
+    mSource.resize(offset.back());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.blocks().size(), 1),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          RawFields<D> raw;
+                          kinematics::SurfaceFrame<D> f;
+                          for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                              const auto& block = L.blocks()[b];
+                              std::size_t next = offset[b];
+                              for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci)
+                                  for (std::size_t p = 0; p < Lattice::SIMPLICES; ++p) {
+                                      int32_t& index = mSourceIndex[ci * Lattice::SIMPLICES + p];
+                                      if (index < 0) continue;
+                                      index = int32_t(next);
+                                      mShape1->sample(centroid(ci, p), raw, nullptr);
+                                      kinematics::makeFrame(raw, f);
+                                      SourcePoint& s = mSource[next++];
+                                      s.d = f.d;
+                                      s.n = f.n;
+                                      packSym<D>(f.Tp, s.Tp);
+                                      packSym<D>(f.Tm, s.Tm);
+                                  }
+                          }
+                      });
+}
+
+template <int D>
+void
+Energy<D>::sourceFrame(std::size_t simplex, const Vec<D>& x, kinematics::SurfaceFrame<D>& f) const
+{
+    const int32_t index = mSourceIndex[simplex];
+    if (index >= 0) {
+        const SourcePoint& s = mSource[index];
+        f.d = s.d;
+        f.n = s.n;
+        f.P = Mat<D>::Identity() - s.n * s.n.transpose();
+        unpackSym<D>(s.Tp, f.Tp);
+        unpackSym<D>(s.Tm, f.Tm);
+    } else {
+        RawFields<D> raw;
+        if (!mShape1->sample(x, raw, nullptr)) throwOutside("shape 1", x.data(), D);
+        kinematics::makeFrame(raw, f);
+    }
+}
+
 
 template <int D>
 template <bool Grad>
@@ -84,7 +198,7 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
 
     std::array<Vec<D>, NC> uc;
     PointGeometry<D> g;
-    RawFields<D> raw1, raw2;
+    RawFields<D> raw2;
     RawFieldDerivatives<D> deriv2;
 
     for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
@@ -92,9 +206,6 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
         const Real side = h * Real(1 << cell.log2Size);
         const Real invSide = 1.0 / side;
         const Real volume = INV_FACTORIAL * std::pow(side, D);
-        Vec<D> origin;
-        for (int a = 0; a < D; ++a)
-            origin[a] = cell.origin[a] * h;
         for (int k = 0; k < NC; ++k)
             uc[k] = u.col(cell.corners[k]);
         const int32_t* slots = L.cellSlots().data() + ci * NC;
@@ -104,14 +215,13 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
             const auto& axis = axes[p];
             // D phi: column pi(m) is (phi(v_m) - phi(v_{m-1})) / side.
             Mat<D> A = Mat<D>::Identity();
-            Vec<D> x = Vec<D>::Zero(), ubar = Vec<D>::Zero();
+            Vec<D> ubar = Vec<D>::Zero();
             for (int m = 0; m <= D; ++m) {
                 ubar += uc[path[m]];
-                for (int a = 0; a < D; ++a)
-                    if (path[m] & (1 << a)) x[a] += 1.0;
                 if (m > 0) A.col(axis[m]) += (uc[path[m]] - uc[path[m - 1]]) * invSide;
             }
-            x = origin + x * (side / (D + 1));
+            const std::size_t simplex = ci * paths.size() + p;
+            const Vec<D> x = centroid(ci, p);
             const Vec<D> y = x + ubar / Real(D + 1);
 
             const SimplexKinematics<D> k(A);
@@ -129,23 +239,27 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
                 t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
             }
 
-            Real d1, d2 = 0;
-            if (!mShape1->sampleDistance(x, d1)) throwOutside("shape 1", x.data(), D);
-            g.eta1 = band(d1);
+            // Band membership: eta1 from the cache (fixed), eta2 from d2(y). Shape 2 is sampled
+            // in full, with derivatives, only where a band term is active.
+            const bool inBand1 = mSourceIndex[simplex] >= 0;
+            g.eta1 = 0;
             g.eta2 = 0;
             g.eta2Derivative = 0;
-            if (symmetric) {
+            bool inBand2 = false;
+            if (symmetric && !inBand1) {
+                Real d2;
                 if (!mShape2->sampleDistance(y, d2)) throwOutside("shape 2", y.data(), D);
-                g.eta2 = band(d2, g.eta2Derivative);
+                inBand2 = band.inBand(d2);
             }
             Vec<D> dy = Vec<D>::Zero();
-            if (g.eta1 > 0 || g.eta2 > 0) {
+            if (inBand1 || inBand2) {
                 ++t.bandSimplices;
-                mShape1->sample(x, raw1, nullptr);
                 if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
                     throwOutside("shape 2", y.data(), D);
-                kinematics::makeFrame(raw1, g.f1);
                 kinematics::makeFrame(raw2, g.f2);
+                sourceFrame(simplex, x, g.f1);
+                if (inBand1) g.eta1 = band(g.f1.d);
+                if (symmetric) g.eta2 = band(g.f2.d, g.eta2Derivative);
                 if (g.eta1 > 0) {
                     t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
                     t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);

@@ -19,11 +19,13 @@
 
 #include <vdbmatch/Parameters.h>
 #include <vdbmatch/geometry/FieldSampler.h>
+#include <vdbmatch/kinematics/SurfaceFrame.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
 
 #include <openvdb/util/NullInterrupter.h>
 
 #include <cstddef>
+#include <vector>
 
 namespace vdbmatch {
 
@@ -82,7 +84,27 @@ private:
     void evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
                        NodeVectors<D>* perSlot) const;
 
+    /// Shape-1 geometry at the centroid of a simplex inside the band of M1: it does not depend on
+    /// phi, so it is sampled once, when the Energy is built. T+ and T- are stored as packed
+    /// symmetric matrices.
+    struct SourcePoint
+    {
+        static constexpr int SYM = D * (D + 1) / 2;
+        Real d;
+        Vec<D> n;
+        Eigen::Matrix<Real, SYM, 1> Tp, Tm;
+    };
+
+    /// Centroid of simplex p of cell ci, Omega units (the quadrature point x_T).
+    Vec<D> centroid(std::size_t ci, std::size_t p) const;
+    void cacheSourceGeometry();
+    /// Frame of shape 1 at x: from the cache when the simplex is in the band of M1, sampled
+    /// otherwise.
+    void sourceFrame(std::size_t simplex, const Vec<D>& x, kinematics::SurfaceFrame<D>& f) const;
+
     const SimplexLattice<D>* mLattice;
+    std::vector<int32_t> mSourceIndex; ///< per simplex (cell * SIMPLICES + p): index or -1
+    std::vector<SourcePoint> mSource;
     const FieldSampler<D>* mShape1;
     const FieldSampler<D>* mShape2;
     EnergyParameters mParams;
