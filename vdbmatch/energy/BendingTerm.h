@@ -10,8 +10,7 @@
 /// @see paper eq:EsymBend, eq:lambdadef, eq:Fbenddirect, eq:Fbendinverse, eq:EdirBend
 #pragma once
 
-#include <vdbmatch/energy/SimplexState.h>
-#include <vdbmatch/math/StoredEnergy.h>
+#include <vdbmatch/energy/ProjectedDensity.h>
 
 namespace vdbmatch {
 namespace energy {
@@ -22,22 +21,10 @@ inline Real
 bendingDirect(const SimplexKinematics<D>& k, const PointGeometry<D>& g, Real c,
               DensityGradient<D>* grad)
 {
-    const auto& f1 = g.f1;
-    const auto& f2 = g.f2;
-    const Mat<D> AT1 = k.A * f1.Tm;
-    const Mat<D> X = f2.Tp * AT1 + f2.n * f1.n.transpose();
-    const Real w = c * g.eta1;
-    if constexpr (Grad) {
-        Mat<D> G;
-        const Real e = math::W<D>(X, G);
-        G *= w;
-        grad->dA += f2.Tp.transpose() * G * f1.Tm.transpose();
-        grad->f2.Tp += G * AT1.transpose();
-        grad->f2.n += G * f1.n;
-        return w * e;
-    } else {
-        return w * math::W<D>(X);
-    }
+    Mat<D> dTp2;
+    const Real e = projectedDirect<D, Grad>(k, g, g.f2.Tp, g.f1.Tm, c, grad, &dTp2);
+    if constexpr (Grad) grad->f2.Tp += dTp2;
+    return e;
 }
 
 /// c eta2 W(T1+ B T2- + n1 (x) n2) J, eq:Fbendinverse, for J > 0.
@@ -46,24 +33,10 @@ inline Real
 bendingInverse(const SimplexKinematics<D>& k, const PointGeometry<D>& g, Real c,
                DensityGradient<D>* grad)
 {
-    const auto& f1 = g.f1;
-    const auto& f2 = g.f2;
-    const Mat<D> T1B = f1.Tp * k.B;
-    const Mat<D> X = T1B * f2.Tm + f1.n * f2.n.transpose();
-    if constexpr (Grad) {
-        Mat<D> G;
-        const Real e = math::W<D>(X, G);
-        const Real w = c * g.eta2 * k.J;
-        G *= w;
-        grad->dB += f1.Tp.transpose() * G * f2.Tm.transpose();
-        grad->f2.Tm += T1B.transpose() * G;
-        grad->f2.n += G.transpose() * f1.n;
-        grad->f2.d += c * g.eta2Derivative * k.J * e;
-        grad->dA += (c * g.eta2 * e) * k.C;
-        return w * e;
-    } else {
-        return c * g.eta2 * k.J * math::W<D>(X);
-    }
+    Mat<D> dTm2;
+    const Real e = projectedInverse<D, Grad>(k, g, g.f1.Tp, g.f2.Tm, c, grad, &dTm2);
+    if constexpr (Grad) grad->f2.Tm += dTm2;
+    return e;
 }
 
 } // namespace energy
