@@ -303,7 +303,8 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
                                                                << u.cols());
     std::vector<EnergyTerms> partial(L.blocks().size());
     NodeVectors<D> perSlot;
-    if constexpr (Grad) perSlot = NodeVectors<D>::Zero(D, L.slotNodes().size());
+    // Each block zeroes its own slots inside the parallel loop (no serial pass over memory).
+    if constexpr (Grad) perSlot.resize(D, L.slotNodes().size());
     bool interrupted = false;
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {
         if (interrupter && interrupter->wasInterrupted()) {
@@ -311,8 +312,13 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
             openvdb::thread::cancelGroupExecution();
             return;
         }
-        for (std::size_t b = r.begin(); b != r.end(); ++b)
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            if constexpr (Grad) {
+                const auto& block = L.blocks()[b];
+                perSlot.middleCols(block.slotBegin, block.slotEnd - block.slotBegin).setZero();
+            }
             evaluateBlock<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr);
+        }
     };
     const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);
     if (threaded)

@@ -1,0 +1,133 @@
+/// @file Prolongation.cc
+#include "Prolongation.h"
+
+#include <openvdb/Exceptions.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace vdbmatch {
+namespace multiscale {
+
+template <int D>
+PiecewiseLinearInterpolator<D>::PiecewiseLinearInterpolator(const SimplexLattice<D>& lattice)
+    : mLattice(&lattice)
+{
+    const auto& cells = lattice.cells();
+    for (std::size_t ci = 0; ci < cells.size(); ++ci) {
+        const int s = cells[ci].log2Size;
+        if (std::size_t(s) >= mCellIndex.size()) mCellIndex.resize(std::size_t(s) + 1);
+        if (!mCellIndex[s]) mCellIndex[s] = openvdb::Int32Grid::create(-1);
+        mCellIndex[s]->tree().setValueOn(cells[ci].origin >> s, int32_t(ci));
+    }
+}
+
+template <int D>
+bool
+PiecewiseLinearInterpolator<D>::locate(const Vec<D>& x, Location& loc) const
+{
+    for (int a = 0; a < D; ++a)
+        if (!(x[a] >= 0 && x[a] <= 1)) return false;
+    const auto& L = *mLattice;
+    // Index coordinates at the lattice level: exact for dyadic x.
+    const Vec<D> p = x * Real(L.resolution());
+    for (std::size_t s = 0; s < mCellIndex.size(); ++s) {
+        if (!mCellIndex[s]) continue;
+        const Real side = Real(1 << s);
+        openvdb::Coord base(0);
+        int faceAxes = 0; // bit a: p lies on a cell boundary along axis a
+        for (int a = 0; a < D; ++a) {
+            const Real q = p[a] / side;
+            const Real f = std::floor(q);
+            base[a] = int(f);
+            if (q == f) faceAxes |= 1 << a;
+        }
+        const auto& tree = mCellIndex[s]->tree();
+        // Candidates: base, and base - 1 along any subset of the face axes.
+        for (int sub = 0; sub < (1 << D); ++sub) {
+            if ((sub & faceAxes) != sub) continue;
+            openvdb::Coord c = base;
+            for (int a = 0; a < D; ++a)
+                if (sub & (1 << a)) c[a] -= 1;
+            const int32_t ci = tree.getValue(c);
+            if (ci < 0) continue;
+            const auto& cell = L.cells()[std::size_t(ci)];
+            Vec<D> t;
+            for (int a = 0; a < D; ++a)
+                t[a] = (p[a] - Real(cell.origin[a])) / side;
+            // Axes by decreasing t: the Kuhn path through the simplex containing t.
+            std::array<int, D> order;
+            std::iota(order.begin(), order.end(), 0);
+            std::stable_sort(order.begin(), order.end(),
+                             [&](int i, int j) { return t[i] > t[j]; });
+            int mask = 0;
+            loc.nodes[0] = cell.corners[0];
+            loc.weights[0] = 1 - t[order[0]];
+            for (int m = 1; m <= D; ++m) {
+                mask |= 1 << order[m - 1];
+                loc.nodes[m] = cell.corners[mask];
+                loc.weights[m] = m < D ? t[order[m - 1]] - t[order[m]] : t[order[D - 1]];
+            }
+            return true;
+        }
+    }
+    return false;
+}
+
+template <int D>
+bool
+PiecewiseLinearInterpolator<D>::evaluate(const NodeVectors<D>& u, const Vec<D>& x,
+                                         Vec<D>& value) const
+{
+    Location loc;
+    if (!locate(x, loc)) return false;
+    Vec<D> v = Vec<D>::Zero();
+    for (int m = 0; m <= D; ++m)
+        if (loc.weights[m] != 0) v += loc.weights[m] * u.col(loc.nodes[m]);
+    value = v;
+    return true;
+}
+
+template <int D>
+NodeVectors<D>
+prolongate(const SimplexLattice<D>& coarse, const NodeVectors<D>& uCoarse,
+           const SimplexLattice<D>& fine, bool threaded)
+{
+    if (fine.level() < coarse.level())
+        OPENVDB_THROW(openvdb::ValueError, "prolongate: the fine lattice (level "
+                                               << fine.level()
+                                               << ") is coarser than the coarse one (level "
+                                               << coarse.level() << ")");
+    if (std::size_t(uCoarse.cols()) != coarse.nodeCount() || uCoarse.rows() != D)
+        OPENVDB_THROW(openvdb::ValueError, "prolongate: expected " << D << " x "
+                                                                   << coarse.nodeCount()
+                                                                   << " coarse values, got "
+                                                                   << uCoarse.rows() << " x "
+                                                                   << uCoarse.cols());
+    const PiecewiseLinearInterpolator<D> interpolator(coarse);
+    NodeVectors<D> u = NodeVectors<D>::Zero(D, fine.nodeCount());
+    auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+        Vec<D> value;
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            if (interpolator.evaluate(uCoarse, fine.nodePosition(i), value)) u.col(i) = value;
+    };
+    const tbb::blocked_range<std::size_t> range(0, fine.nodeCount(), 1024);
+    if (threaded)
+        tbb::parallel_for(range, body);
+    else
+        body(range);
+    return u;
+}
+
+template class PiecewiseLinearInterpolator<2>;
+template class PiecewiseLinearInterpolator<3>;
+template NodeVectors<2> prolongate<2>(const SimplexLattice<2>&, const NodeVectors<2>&,
+                                      const SimplexLattice<2>&, bool);
+template NodeVectors<3> prolongate<3>(const SimplexLattice<3>&, const NodeVectors<3>&,
+                                      const SimplexLattice<3>&, bool);
+
+} // namespace multiscale
+} // namespace vdbmatch

@@ -1,0 +1,230 @@
+/// @file Descent.cc
+#include "Descent.h"
+
+#include <openvdb/Exceptions.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+namespace vdbmatch {
+namespace solver {
+
+const char*
+toString(Status status)
+{
+    switch (status) {
+    case Status::Converged: return "converged";
+    case Status::MaxIterations: return "max iterations";
+    case Status::LineSearchFailed: return "line search failed";
+    case Status::Interrupted: return "interrupted";
+    }
+    return "unknown";
+}
+
+const char*
+toString(ConvergenceTest test)
+{
+    switch (test) {
+    case ConvergenceTest::None: return "none";
+    case ConvergenceTest::GradientNorm: return "gradient norm";
+    case ConvergenceTest::EnergyDecrease: return "energy decrease";
+    }
+    return "unknown";
+}
+
+void
+DescentOptions::validate() const
+{
+    auto fail = [](const char* what) {
+        OPENVDB_THROW(openvdb::ValueError, "DescentOptions: " << what);
+    };
+    if (maxIterations < 0) fail("maxIterations must be >= 0");
+    if (!(relativeGradientTolerance >= 0) || !std::isfinite(relativeGradientTolerance))
+        fail("relativeGradientTolerance must be finite and >= 0");
+    if (!(gradientTolerance >= 0) || !std::isfinite(gradientTolerance))
+        fail("gradientTolerance must be finite and >= 0");
+    if (!(energyTolerance >= 0) || !std::isfinite(energyTolerance))
+        fail("energyTolerance must be finite and >= 0");
+    if (energyWindow < 0) fail("energyWindow must be >= 0");
+    if (restartInterval < 0) fail("restartInterval must be >= 0");
+    if (!(initialDisplacement > 0) || !std::isfinite(initialDisplacement))
+        fail("initialDisplacement must be finite and > 0");
+    lineSearch.validate();
+}
+
+template <int D>
+Descent<D>::Descent(const Energy<D>& energy, const H1Metric<D>& metric, const DescentOptions& opts)
+    : mEnergy(&energy), mMetric(&metric), mOpts(opts)
+{
+    mOpts.validate();
+    if (&metric.lattice() != &energy.lattice())
+        OPENVDB_THROW(openvdb::ValueError,
+                      "Descent: the metric and the energy must be built on the same lattice");
+}
+
+template <int D>
+Report
+Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threaded,
+                openvdb::util::NullInterrupter* interrupter) const
+{
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    auto elapsed = [&] { return std::chrono::duration<Real>(Clock::now() - start).count(); };
+
+    const Energy<D>& energy = *mEnergy;
+    const H1Metric<D>& metric = *mMetric;
+    const SimplexLattice<D>& lattice = energy.lattice();
+    const Real h = lattice.h();
+    if (std::size_t(u.cols()) != lattice.nodeCount() || u.rows() != D)
+        OPENVDB_THROW(openvdb::ValueError, "Descent::run: expected " << D << " x "
+                                                                     << lattice.nodeCount()
+                                                                     << " displacements, got "
+                                                                     << u.rows() << " x "
+                                                                     << u.cols());
+    metric.zeroDirichlet(u);
+
+    Report report;
+    report.level = lattice.level();
+    auto interrupted = [&] { return interrupter && interrupter->wasInterrupted(); };
+    auto finish = [&](Status status) {
+        report.status = status;
+        report.minJacobian = energy.minJacobianDeterminant(u, threaded);
+        report.elapsedSeconds = elapsed();
+        return report;
+    };
+
+    // Gradient at u: g (co-vector, Dirichlet entries zeroed), r = G^{-1} g, <g, r>.
+    NodeVectors<D> g, r, gNew, rNew, p, uNew;
+    auto gradientAt = [&](const NodeVectors<D>& x, NodeVectors<D>& gx, NodeVectors<D>& rx,
+                          EnergyTerms& terms) -> Real {
+        const Real E = energy.valueAndGradient(x, gx, &terms, threaded, interrupter);
+        ++report.gradientEvaluations;
+        if (!std::isfinite(E)) return E;
+        metric.zeroDirichlet(gx);
+        report.metricIterations += std::size_t(metric.applyInverse(gx, rx, threaded).iterations);
+        return E;
+    };
+
+    EnergyTerms terms;
+    Real E = gradientAt(u, g, r, terms);
+    if (!std::isfinite(E)) {
+        if (interrupted()) return finish(Status::Interrupted);
+        OPENVDB_THROW(openvdb::ValueError,
+                      "Descent::run: the energy of the initial guess is +inf ("
+                          << terms.invertedSimplices << " simplices with det D phi <= 0)");
+    }
+    Real gg = metric.pairing(g, r);
+    report.initialEnergy = report.energy = E;
+    report.terms = terms;
+    report.initialGradNorm = report.gradNorm = std::sqrt(std::max(gg, Real(0)));
+    const Real gradLimit =
+        std::max(mOpts.gradientTolerance, mOpts.relativeGradientTolerance * report.initialGradNorm);
+
+    auto notify = [&](int iteration, Real step, Real maxDisplacement, bool restarted) {
+        if (!observer) return;
+        IterationInfo info;
+        info.level = report.level;
+        info.iteration = iteration;
+        info.energy = report.energy;
+        info.terms = report.terms;
+        info.gradNorm = report.gradNorm;
+        info.step = step;
+        info.maxDisplacement = maxDisplacement;
+        info.energyEvaluations = report.energyEvaluations + report.gradientEvaluations;
+        info.restarted = restarted;
+        info.elapsedSeconds = elapsed();
+        observer(info);
+    };
+    notify(0, 0, 0, true);
+
+    ArmijoLineSearch<D> lineSearch(mOpts.lineSearch);
+    auto steepest = [&] {
+        p = -r;
+        const Real pMax = p.size() ? p.cwiseAbs().maxCoeff() : 0.0;
+        if (pMax > 0) lineSearch.setInitialStep(mOpts.initialDisplacement * h / pMax);
+        return -gg;
+    };
+    Real slope = steepest();
+    bool restarted = true;
+    std::vector<Real> history{E};
+
+    while (true) {
+        if (!(report.gradNorm > gradLimit)) {
+            report.convergedBy = ConvergenceTest::GradientNorm;
+            return finish(Status::Converged);
+        }
+        if (interrupted()) return finish(Status::Interrupted);
+        if (report.iterations >= mOpts.maxIterations) return finish(Status::MaxIterations);
+
+        const LineSearchResult ls =
+            lineSearch.search(energy, u, E, slope, p, uNew, threaded, interrupter);
+        report.energyEvaluations += std::size_t(ls.evaluations);
+        if (ls.status == LineSearchStatus::Interrupted) return finish(Status::Interrupted);
+        if (!ls.isAccepted()) {
+            if (restarted) return finish(Status::LineSearchFailed);
+            ++report.restarts;
+            slope = steepest();
+            restarted = true;
+            continue;
+        }
+
+        const Real maxDisplacement = ls.step * p.cwiseAbs().maxCoeff();
+        u.swap(uNew);
+        const Real Enew = gradientAt(u, gNew, rNew, terms);
+        ++report.iterations;
+        report.lastStep = ls.step;
+        if (!std::isfinite(Enew)) {
+            // Only cancellation can make the energy of an accepted step infinite.
+            report.energy = ls.energy;
+            report.terms = ls.terms;
+            return finish(Status::Interrupted);
+        }
+        const Real ggNew = metric.pairing(gNew, rNew);
+        Real beta = 0;
+        switch (mOpts.update) {
+        case ConjugateGradientUpdate::SteepestDescent: beta = 0; break;
+        case ConjugateGradientUpdate::FletcherReeves: beta = gg > 0 ? ggNew / gg : 0.0; break;
+        case ConjugateGradientUpdate::PolakRibierePlus:
+            beta = gg > 0 ? std::max(Real(0), (ggNew - metric.pairing(g, rNew)) / gg) : 0.0;
+            break;
+        }
+        if (mOpts.restartInterval > 0 && report.iterations % mOpts.restartInterval == 0) beta = 0;
+
+        const bool movedSteepest = restarted;
+        E = Enew;
+        g.swap(gNew);
+        r.swap(rNew);
+        gg = ggNew;
+        report.energy = E;
+        report.terms = terms;
+        report.gradNorm = std::sqrt(std::max(gg, Real(0)));
+
+        // Next direction; restart when it is not a descent direction.
+        p = beta * p - r;
+        slope = metric.pairing(g, p);
+        restarted = beta == 0;
+        if (!(slope < 0)) {
+            ++report.restarts;
+            p = -r;
+            slope = -gg;
+            restarted = true;
+        }
+        notify(report.iterations, ls.step, maxDisplacement, movedSteepest);
+
+        history.push_back(E);
+        const std::size_t w = std::size_t(mOpts.energyWindow);
+        if (w > 0 && history.size() > w &&
+            history[history.size() - 1 - w] - E <= mOpts.energyTolerance * std::abs(E)) {
+            report.convergedBy = ConvergenceTest::EnergyDecrease;
+            return finish(Status::Converged);
+        }
+    }
+}
+
+template class Descent<2>;
+template class Descent<3>;
+
+} // namespace solver
+} // namespace vdbmatch

@@ -1,0 +1,153 @@
+/// @file Descent.h
+/// @brief Nonlinear conjugate gradient descent of the matching energy in the weighted H^1 metric
+///        with Armijo line search, on one level (paper sec:numerics), and its Report.
+///
+/// With g_k the L2 gradient of E at u_k (a co-vector, Dirichlet entries dropped) and
+/// r_k = G^{-1} g_k its H^1 representative (H1Metric):
+/// @f[ p_0 = -r_0,\qquad p_k = -r_k + \beta_k p_{k-1},\qquad u_{k+1} = u_k + t_k p_k, @f]
+/// t_k from ArmijoLineSearch, and the metric inner products
+/// - Fletcher-Reeves: beta_k = <g_k, r_k> / <g_{k-1}, r_{k-1}>
+/// - Polak-Ribiere+: beta_k = max(0, <g_k - g_{k-1}, r_k> / <g_{k-1}, r_{k-1}>) (default)
+/// - steepest descent: beta_k = 0.
+/// The direction is reset to -r_k (a "restart") when <g_k, p_k> >= 0, every restartInterval
+/// iterations if set, and once after a failed line search before giving up.
+///
+/// Stopping rules, checked in this order (defaults in DescentOptions):
+/// 1. gradient: ||g_k||_{G^{-1}} = sqrt(<g_k, r_k>) <= max(gradientTolerance,
+///    relativeGradientTolerance * ||g_0||_{G^{-1}})                      -> Converged
+/// 2. interrupter->wasInterrupted(), checked once per iteration (and after an evaluation that
+///    returned +inf, to tell cancellation from inversion)               -> Interrupted
+/// 3. the line search fails along -r_k (after a restart)                -> LineSearchFailed
+/// 4. energy stagnation: E_{k-w} - E_k <= energyTolerance * |E_k| with w = energyWindow
+///                                                                      -> Converged
+/// 5. k = maxIterations                                                 -> MaxIterations
+/// Non-convergence and cancellation are outcomes in the Report, not exceptions; u always holds
+/// the last accepted iterate (finite energy, det D phi > 0 on every simplex).
+///
+/// Progress goes to an IterationObserver; the library never prints.
+/// @see paper sec:numerics
+#pragma once
+
+#include <vdbmatch/Types.h>
+#include <vdbmatch/energy/Energy.h>
+#include <vdbmatch/solver/ArmijoLineSearch.h>
+#include <vdbmatch/solver/H1Metric.h>
+
+#include <openvdb/util/NullInterrupter.h>
+
+#include <cstddef>
+#include <functional>
+
+namespace vdbmatch {
+namespace solver {
+
+/// How a descent (or a level of it) ended.
+enum class Status {
+    Converged,        ///< a convergence test passed (see Report::convergedBy)
+    MaxIterations,    ///< the iteration limit was reached
+    LineSearchFailed, ///< no acceptable step even along the steepest descent direction
+    Interrupted       ///< the interrupter fired
+};
+const char* toString(Status status);
+
+/// Which test declared convergence.
+enum class ConvergenceTest { None, GradientNorm, EnergyDecrease };
+const char* toString(ConvergenceTest test);
+
+/// Result of a descent at one level, modelled on openvdb::math::pcg::State.
+struct Report
+{
+    Status status = Status::MaxIterations;
+    ConvergenceTest convergedBy = ConvergenceTest::None;
+    int level = 0;      ///< lattice level
+    int iterations = 0; ///< accepted steps
+    std::size_t energyEvaluations = 0;   ///< value-only evaluations (line-search trials)
+    std::size_t gradientEvaluations = 0; ///< value-and-gradient evaluations
+    std::size_t metricIterations = 0;    ///< CG iterations in H1Metric::applyInverse (0: direct)
+    int restarts = 0;                    ///< directions reset to steepest descent
+    Real initialEnergy = INF;            ///< E at the initial guess
+    Real energy = INF;                   ///< E at the result
+    EnergyTerms terms;                   ///< terms at the result
+    Real initialGradNorm = 0;            ///< ||g||_{G^{-1}} at the initial guess
+    Real gradNorm = 0;                   ///< ||g||_{G^{-1}} at the result
+    Real lastStep = 0;                   ///< last accepted line-search step t
+    Real minJacobian = 0;                ///< min det D phi over the simplices, at the result
+    Real elapsedSeconds = 0;             ///< wall time of the descent
+
+    bool isConverged() const { return status == Status::Converged; }
+};
+
+/// Progress of one iteration (iteration 0: the initial guess, step 0).
+struct IterationInfo
+{
+    int level = 0;
+    int iteration = 0;
+    Real energy = INF;
+    EnergyTerms terms;
+    Real gradNorm = 0;                 ///< ||g||_{G^{-1}}
+    Real step = 0;                     ///< accepted line-search step t
+    Real maxDisplacement = 0;          ///< max_i |t p_i|, Omega units
+    std::size_t energyEvaluations = 0; ///< so far at this level (value and value-and-gradient)
+    bool restarted = false;            ///< this iteration moved along -r (steepest descent)
+    Real elapsedSeconds = 0;           ///< since the start of the level
+};
+
+/// Called after every iteration, on the calling thread.
+/// Signature: void(const IterationInfo& info).
+using IterationObserver = std::function<void(const IterationInfo&)>;
+
+enum class ConjugateGradientUpdate { SteepestDescent, FletcherReeves, PolakRibierePlus };
+
+struct DescentOptions
+{
+    /// Iteration limit per level.
+    int maxIterations = 300;
+    /// Converged when ||g||_{G^{-1}} <= relativeGradientTolerance * ||g_0||_{G^{-1}}.
+    Real relativeGradientTolerance = 1e-4;
+    /// Converged when ||g||_{G^{-1}} <= gradientTolerance (absolute; 0 disables).
+    Real gradientTolerance = 0;
+    /// Converged when E_{k-w} - E_k <= energyTolerance * |E_k|, w = energyWindow (0 disables).
+    Real energyTolerance = 1e-6;
+    int energyWindow = 5;
+    ConjugateGradientUpdate update = ConjugateGradientUpdate::PolakRibierePlus;
+    /// Reset to steepest descent every restartInterval iterations (0: only when needed).
+    int restartInterval = 0;
+    /// First trial step of a level (and after a restart following a failed search): the node
+    /// moving most moves by initialDisplacement * h.
+    Real initialDisplacement = 0.5;
+    ArmijoOptions lineSearch;
+
+    /// Throws openvdb::ValueError naming the first invalid field.
+    void validate() const;
+};
+
+template <int D> class Descent
+{
+public:
+    /// @param energy, metric  on the same lattice; must outlive the Descent
+    /// @throw openvdb::ValueError if the options are invalid or the metric is on another lattice
+    Descent(const Energy<D>& energy, const H1Metric<D>& metric, const DescentOptions& opts = {});
+
+    const DescentOptions& options() const { return mOpts; }
+
+    /// Minimises E from the initial guess @a u (D x nodeCount, Omega units; Dirichlet columns
+    /// are set to 0), leaving the result in @a u.
+    /// @param observer     progress callback, may be empty
+    /// @param threaded     forwarded to the energy and the metric
+    /// @param interrupter  checked once per iteration and forwarded to the energy
+    /// @throw openvdb::ValueError if u has the wrong size or E(u) = +inf (an inverted simplex
+    ///        in the initial guess), or from Energy (fields sampled outside their coverage).
+    Report run(NodeVectors<D>& u, const IterationObserver& observer = {}, bool threaded = true,
+               openvdb::util::NullInterrupter* interrupter = nullptr) const;
+
+private:
+    const Energy<D>* mEnergy;
+    const H1Metric<D>* mMetric;
+    DescentOptions mOpts;
+};
+
+extern template class Descent<2>;
+extern template class Descent<3>;
+
+} // namespace solver
+} // namespace vdbmatch

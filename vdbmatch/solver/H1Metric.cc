@@ -1,0 +1,337 @@
+/// @file H1Metric.cc
+#include "H1Metric.h"
+
+#include <openvdb/Exceptions.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+
+namespace vdbmatch {
+namespace solver {
+
+namespace {
+
+template <int D>
+constexpr Real
+factorial()
+{
+    return D == 2 ? 2.0 : 6.0;
+}
+
+/// True if corner bitmasks a and b lie in a common Kuhn simplex (one is a subset of the other):
+/// exactly the nonzero entries of the element matrices.
+constexpr bool
+comparable(int a, int b)
+{
+    return (a & b) == a || (a & b) == b;
+}
+
+/// Side of a cell in Omega units.
+template <int D>
+Real
+cellSide(const SimplexLattice<D>& lattice, const typename SimplexLattice<D>::Cell& cell)
+{
+    return lattice.h() * Real(1 << cell.log2Size);
+}
+
+/// Runs body(cell, slots) for every cell, accumulating per-slot D-vectors, then gathers them per
+/// node (deterministic: fixed block order, no atomics).
+template <int D, typename CellBody>
+void
+assemblePerNode(const SimplexLattice<D>& lattice, NodeVectors<D>& out, bool threaded,
+                const CellBody& body)
+{
+    NodeVectors<D> perSlot = NodeVectors<D>::Zero(D, lattice.slotNodes().size());
+    auto blocks = [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+            const auto& block = lattice.blocks()[b];
+            for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
+                const int32_t* slots =
+                    lattice.cellSlots().data() + ci * SimplexLattice<D>::CORNERS;
+                body(lattice.cells()[ci], slots, perSlot);
+            }
+        }
+    };
+    const tbb::blocked_range<std::size_t> range(0, lattice.blocks().size(), 1);
+    if (threaded)
+        tbb::parallel_for(range, blocks);
+    else
+        blocks(range);
+    lattice.gatherSlots(perSlot, out, threaded);
+}
+
+/// Triplets of s^D massWeight M_ref + s^{D-2} stiffWeight L_ref over all cells, rows and
+/// columns mapped through @a index (entries with index < 0 dropped).
+template <int D>
+SparseMatrix
+assemble(const SimplexLattice<D>& lattice, Real massWeight, Real stiffWeight,
+         const std::vector<int32_t>* index, std::size_t size)
+{
+    constexpr int C = SimplexLattice<D>::CORNERS;
+    const auto& ref = ReferenceCellMatrices<D>::get();
+    std::vector<Eigen::Triplet<Real>> triplets;
+    std::size_t perCell = 0;
+    for (int a = 0; a < C; ++a)
+        for (int b = 0; b < C; ++b)
+            perCell += comparable(a, b);
+    triplets.reserve(lattice.cellCount() * perCell);
+    for (const auto& cell : lattice.cells()) {
+        const Real s = cellSide(lattice, cell);
+        const Real sm = massWeight * std::pow(s, D);
+        const Real sl = stiffWeight * std::pow(s, D - 2);
+        for (int a = 0; a < C; ++a) {
+            const int32_t ia = index ? (*index)[cell.corners[a]] : cell.corners[a];
+            if (ia < 0) continue;
+            for (int b = 0; b < C; ++b) {
+                if (!comparable(a, b)) continue;
+                const int32_t ib = index ? (*index)[cell.corners[b]] : cell.corners[b];
+                if (ib < 0) continue;
+                triplets.emplace_back(ia, ib, sm * ref.mass(a, b) + sl * ref.stiffness(a, b));
+            }
+        }
+    }
+    SparseMatrix A(Eigen::Index(size), Eigen::Index(size));
+    A.setFromTriplets(triplets.begin(), triplets.end());
+    return A;
+}
+
+} // namespace
+
+template <int D>
+const ReferenceCellMatrices<D>&
+ReferenceCellMatrices<D>::get()
+{
+    static const ReferenceCellMatrices table = [] {
+        ReferenceCellMatrices r;
+        r.mass.setZero();
+        r.stiffness.setZero();
+        const Real volume = 1.0 / factorial<D>();
+        // Mass of P1 on a simplex: |T| (1 + delta_ij) / ((D+1)(D+2)).
+        const Real m = volume / Real((D + 1) * (D + 2));
+        const auto& paths = KuhnSplit<D>::path();
+        const auto& axes = KuhnSplit<D>::axis();
+        for (std::size_t p = 0; p < paths.size(); ++p) {
+            // grad lambda_m = e_{pi(m)} [m >= 1] - e_{pi(m+1)} [m < D] (side 1).
+            std::array<Vec<D>, D + 1> grad;
+            for (int k = 0; k <= D; ++k) {
+                grad[k].setZero();
+                if (k >= 1) grad[k][axes[p][k]] += 1;
+                if (k < D) grad[k][axes[p][k + 1]] -= 1;
+            }
+            for (int i = 0; i <= D; ++i)
+                for (int j = 0; j <= D; ++j) {
+                    const int a = paths[p][i], b = paths[p][j];
+                    r.mass(a, b) += m * (i == j ? 2.0 : 1.0);
+                    r.stiffness(a, b) += volume * grad[i].dot(grad[j]);
+                }
+        }
+        return r;
+    }();
+    return table;
+}
+
+template <int D>
+SparseMatrix
+assembleMassMatrix(const SimplexLattice<D>& lattice)
+{
+    return assemble<D>(lattice, 1.0, 0.0, nullptr, lattice.nodeCount());
+}
+
+template <int D>
+SparseMatrix
+assembleStiffnessMatrix(const SimplexLattice<D>& lattice)
+{
+    return assemble<D>(lattice, 0.0, 1.0, nullptr, lattice.nodeCount());
+}
+
+template <int D>
+H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1MetricOptions& opts,
+                      bool threaded)
+    : mLattice(&lattice), mTau(tau), mOpts(opts)
+{
+    if (!std::isfinite(tau) || tau < 0)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "H1Metric: tau must be finite and >= 0, got " << tau);
+    const std::size_t n = lattice.nodeCount();
+    mUnknown.assign(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (lattice.isBoundaryNode(i)) continue;
+        mUnknown[i] = int32_t(mInteriorNodes.size());
+        mInteriorNodes.push_back(int32_t(i));
+    }
+
+    bool direct = false;
+    switch (opts.method) {
+    case H1MetricOptions::Method::Direct: direct = true; break;
+    case H1MetricOptions::Method::ConjugateGradient: direct = false; break;
+    case H1MetricOptions::Method::Auto:
+        direct = D == 2 || unknownCount() <= opts.directMaxUnknowns3D;
+        break;
+    }
+
+    if (direct) {
+        if (unknownCount() == 0) return;
+        mFactor = std::make_unique<Factor>();
+        mFactor->compute(matrix());
+        if (mFactor->info() != Eigen::Success)
+            OPENVDB_THROW(openvdb::ValueError, "H1Metric: the factorisation of M + tau L failed ("
+                                                   << unknownCount() << " unknowns)");
+        return;
+    }
+
+    // Jacobi preconditioner: the diagonal of G, per node.
+    const auto& ref = ReferenceCellMatrices<D>::get();
+    NodeVectors<D> diag;
+    assemblePerNode<D>(lattice, diag, threaded,
+                       [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
+                           NodeVectors<D>& perSlot) {
+                           const Real s = cellSide(lattice, cell);
+                           const Real sm = std::pow(s, D), sl = mTau * std::pow(s, D - 2);
+                           for (int a = 0; a < SimplexLattice<D>::CORNERS; ++a)
+                               perSlot.col(slots[a]).array() +=
+                                   sm * ref.mass(a, a) + sl * ref.stiffness(a, a);
+                       });
+    mInverseDiagonal.setZero(Eigen::Index(n));
+    for (std::size_t i = 0; i < n; ++i)
+        if (mUnknown[i] >= 0) mInverseDiagonal[i] = 1.0 / diag(0, i);
+}
+
+template <int D> H1Metric<D>::~H1Metric() = default;
+
+template <int D>
+SparseMatrix
+H1Metric<D>::matrix() const
+{
+    return assemble<D>(*mLattice, 1.0, mTau, &mUnknown, unknownCount());
+}
+
+template <int D>
+void
+H1Metric<D>::zeroDirichlet(NodeVectors<D>& v) const
+{
+    for (std::size_t i = 0; i < mUnknown.size(); ++i)
+        if (mUnknown[i] < 0) v.col(i).setZero();
+}
+
+template <int D>
+Real
+H1Metric<D>::pairing(const NodeVectors<D>& g, const NodeVectors<D>& v) const
+{
+    Real sum = 0;
+    for (int32_t i : mInteriorNodes)
+        sum += g.col(i).dot(v.col(i));
+    return sum;
+}
+
+template <int D>
+void
+H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, bool threaded) const
+{
+    constexpr int C = SimplexLattice<D>::CORNERS;
+    const auto& ref = ReferenceCellMatrices<D>::get();
+    const auto& L = *mLattice;
+    assemblePerNode<D>(
+        L, out, threaded,
+        [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
+            NodeVectors<D>& perSlot) {
+            const Real s = cellSide(L, cell);
+            const Real sm = std::pow(s, D), sl = mTau * std::pow(s, D - 2);
+            Eigen::Matrix<Real, D, C> local;
+            for (int a = 0; a < C; ++a) {
+                const int32_t node = cell.corners[a];
+                if (mUnknown[node] >= 0)
+                    local.col(a) = v.col(node);
+                else
+                    local.col(a).setZero();
+            }
+            const Eigen::Matrix<Real, C, C> K = sm * ref.mass + sl * ref.stiffness;
+            const Eigen::Matrix<Real, D, C> product = local * K;
+            for (int a = 0; a < C; ++a)
+                perSlot.col(slots[a]) += product.col(a);
+        });
+    zeroDirichlet(out);
+}
+
+template <int D>
+MetricSolveInfo
+H1Metric<D>::applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out, bool threaded) const
+{
+    const std::size_t n = mLattice->nodeCount();
+    if (std::size_t(g.cols()) != n)
+        OPENVDB_THROW(openvdb::ValueError, "H1Metric::applyInverse: expected "
+                                               << n << " node values, got " << g.cols());
+    out.setZero(D, Eigen::Index(n));
+    if (unknownCount() == 0) return {};
+    if (!mFactor) return solveCg(g, out, threaded);
+
+    // All D components with one factorisation: right-hand sides as the columns of B.
+    Eigen::Matrix<Real, Eigen::Dynamic, D> B(Eigen::Index(unknownCount()), D);
+    for (std::size_t k = 0; k < mInteriorNodes.size(); ++k)
+        B.row(Eigen::Index(k)) = g.col(mInteriorNodes[k]).transpose();
+    const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(B);
+    for (std::size_t k = 0; k < mInteriorNodes.size(); ++k)
+        out.col(mInteriorNodes[k]) = X.row(Eigen::Index(k)).transpose();
+    return {};
+}
+
+template <int D>
+MetricSolveInfo
+H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const
+{
+    // Jacobi-preconditioned CG, the D components iterated together (one operator application
+    // per iteration serves all of them); a converged component is frozen.
+    using Col = Vec<D>;
+    auto dots = [](const NodeVectors<D>& a, const NodeVectors<D>& b) -> Col {
+        return a.cwiseProduct(b).rowwise().sum();
+    };
+    NodeVectors<D> r = g;
+    zeroDirichlet(r);
+    const Col bNorm = dots(r, r).cwiseSqrt();
+    NodeVectors<D> z = r * mInverseDiagonal.asDiagonal();
+    NodeVectors<D> p = z, q;
+    Col rz = dots(r, z);
+    Col rNorm = bNorm;
+    MetricSolveInfo info;
+    auto done = [&](int c) { return !(rNorm[c] > mOpts.cgTolerance * bNorm[c]); };
+    auto allDone = [&] {
+        for (int c = 0; c < D; ++c)
+            if (!done(c)) return false;
+        return true;
+    };
+    while (!allDone() && info.iterations < mOpts.cgMaxIterations) {
+        apply(p, q, threaded);
+        const Col pq = dots(p, q);
+        Col alpha;
+        for (int c = 0; c < D; ++c)
+            alpha[c] = done(c) || !(pq[c] > 0) ? 0.0 : rz[c] / pq[c];
+        x += alpha.asDiagonal() * p;
+        r -= alpha.asDiagonal() * q;
+        z = r * mInverseDiagonal.asDiagonal();
+        const Col rzNew = dots(r, z);
+        rNorm = dots(r, r).cwiseSqrt();
+        Col beta;
+        for (int c = 0; c < D; ++c)
+            beta[c] = rz[c] > 0 ? rzNew[c] / rz[c] : 0.0;
+        p = z + beta.asDiagonal() * p;
+        rz = rzNew;
+        ++info.iterations;
+    }
+    info.converged = allDone();
+    for (int c = 0; c < D; ++c)
+        if (bNorm[c] > 0)
+            info.relativeResidual = std::max(info.relativeResidual, rNorm[c] / bNorm[c]);
+    return info;
+}
+
+template class H1Metric<2>;
+template class H1Metric<3>;
+template struct ReferenceCellMatrices<2>;
+template struct ReferenceCellMatrices<3>;
+template SparseMatrix assembleMassMatrix<2>(const SimplexLattice<2>&);
+template SparseMatrix assembleMassMatrix<3>(const SimplexLattice<3>&);
+template SparseMatrix assembleStiffnessMatrix<2>(const SimplexLattice<2>&);
+template SparseMatrix assembleStiffnessMatrix<3>(const SimplexLattice<3>&);
+
+} // namespace solver
+} // namespace vdbmatch
