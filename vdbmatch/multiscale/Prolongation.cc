@@ -61,8 +61,7 @@ PiecewiseLinearInterpolator<D>::locate(const Vec<D>& x, Location& loc) const
             // Axes by decreasing t: the Kuhn path through the simplex containing t.
             std::array<int, D> order;
             std::iota(order.begin(), order.end(), 0);
-            std::stable_sort(order.begin(), order.end(),
-                             [&](int i, int j) { return t[i] > t[j]; });
+            std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return t[i] > t[j]; });
             int mask = 0;
             loc.nodes[0] = cell.corners[0];
             loc.weights[0] = 1 - t[order[0]];
@@ -102,11 +101,10 @@ prolongate(const SimplexLattice<D>& coarse, const NodeVectors<D>& uCoarse,
                                                << ") is coarser than the coarse one (level "
                                                << coarse.level() << ")");
     if (std::size_t(uCoarse.cols()) != coarse.nodeCount() || uCoarse.rows() != D)
-        OPENVDB_THROW(openvdb::ValueError, "prolongate: expected " << D << " x "
-                                                                   << coarse.nodeCount()
-                                                                   << " coarse values, got "
-                                                                   << uCoarse.rows() << " x "
-                                                                   << uCoarse.cols());
+        OPENVDB_THROW(openvdb::ValueError, "prolongate: expected "
+                                               << D << " x " << coarse.nodeCount()
+                                               << " coarse values, got " << uCoarse.rows() << " x "
+                                               << uCoarse.cols());
     const PiecewiseLinearInterpolator<D> interpolator(coarse);
     NodeVectors<D> u = NodeVectors<D>::Zero(D, fine.nodeCount());
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {

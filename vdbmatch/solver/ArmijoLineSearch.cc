@@ -3,10 +3,17 @@
 
 #include <openvdb/Exceptions.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace vdbmatch {
 namespace solver {
+
+namespace {
+/// Smallest backtracking factor allowed to the quadratic interpolation (Nocedal & Wright,
+/// sec. 3.5, safeguard of the interpolating backtracking).
+constexpr Real MIN_INTERPOLATED_SHRINK = 0.1;
+} // namespace
 
 void
 ArmijoOptions::validate() const
@@ -32,11 +39,16 @@ const char*
 toString(LineSearchStatus status)
 {
     switch (status) {
-    case LineSearchStatus::Accepted: return "accepted";
-    case LineSearchStatus::NotDescentDirection: return "not a descent direction";
-    case LineSearchStatus::StepUnderflow: return "step underflow";
-    case LineSearchStatus::TooManyEvaluations: return "too many evaluations";
-    case LineSearchStatus::Interrupted: return "interrupted";
+    case LineSearchStatus::Accepted:
+        return "accepted";
+    case LineSearchStatus::NotDescentDirection:
+        return "not a descent direction";
+    case LineSearchStatus::StepUnderflow:
+        return "step underflow";
+    case LineSearchStatus::TooManyEvaluations:
+        return "too many evaluations";
+    case LineSearchStatus::Interrupted:
+        return "interrupted";
     }
     return "unknown";
 }
@@ -77,13 +89,19 @@ armijoBacktrack(const TrialEnergy& trial, Real E0, Real slope, Real t0, Real pMa
             result.energy = E;
             result.terms = terms;
             return result;
+        } else if (opts.interpolate) {
+            // Minimiser of the quadratic through E0, slope and E(t), kept in
+            // [MIN_INTERPOLATED_SHRINK t, shrink t].
+            const Real curvature = E - E0 - slope * t;
+            const Real tq = curvature > 0 ? -slope * t * t / (2 * curvature) : opts.shrink * t;
+            t = std::clamp(tq, MIN_INTERPOLATED_SHRINK * t, opts.shrink * t);
+            continue;
         }
         t *= opts.shrink;
     }
 }
 
-template <int D>
-ArmijoLineSearch<D>::ArmijoLineSearch(const ArmijoOptions& opts) : mOpts(opts)
+template <int D> ArmijoLineSearch<D>::ArmijoLineSearch(const ArmijoOptions& opts) : mOpts(opts)
 {
     mOpts.validate();
 }
@@ -113,8 +131,8 @@ ArmijoLineSearch<D>::search(const Energy<D>& energy, const NodeVectors<D>& u, Re
         evaluated = true;
         return energy.value(uNew, &terms, threaded, interrupter);
     };
-    LineSearchResult result = armijoBacktrack(trial, E0, slope, mInitialStep, pMax, mOpts,
-                                              interrupter);
+    LineSearchResult result =
+        armijoBacktrack(trial, E0, slope, mInitialStep, pMax, mOpts, interrupter);
     if (result.isAccepted()) {
         mInitialStep = mOpts.grow * result.step;
         // uNew holds the last trial, the accepted one.

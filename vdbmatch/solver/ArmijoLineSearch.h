@@ -4,8 +4,10 @@
 ///
 /// A trial step t is accepted when
 /// @f[ E(u + t p) \le E(u) + c_1\, t\, \langle g, p\rangle, @f]
-/// with g the L2 gradient (co-vector) at u and <g, p> < 0. Otherwise t is multiplied by
-/// `shrink` and tried again. A trial whose energy is +inf (a simplex with det D phi <= 0) is
+/// with g the L2 gradient (co-vector) at u and <g, p> < 0. Otherwise t shrinks and is tried
+/// again: to the minimiser of the quadratic through E(u), <g, p> and E(u + t p), kept in
+/// [0.1 t, shrink t] (`interpolate`, default; it halved the rejected trials on the tests'
+/// problems), or to shrink * t. A trial whose energy is +inf (a simplex with det D phi <= 0) is
 /// simply rejected, as is, without an energy evaluation, a trial that moves a node out of the
 /// closed unit box: phi = Id on the boundary of Omega and det D phi > 0 make phi map Omega onto
 /// itself, so such a step would invert a simplex anyway (on lattices that cover Omega), and the
@@ -41,6 +43,9 @@ struct ArmijoOptions
     /// any meaningful displacement, near the rounding of node positions in the unit box.
     Real minDisplacement = 1e-13;
     int maxEvaluations = 60; ///< energy evaluations per search
+    /// Backtrack to the minimiser of the quadratic interpolating E(u), <g, p> and the rejected
+    /// finite E(u + t p), safeguarded to [0.1 t, shrink t]; false: always t *= shrink.
+    bool interpolate = true;
 
     /// Throws openvdb::ValueError naming the first invalid field.
     void validate() const;
@@ -59,10 +64,10 @@ const char* toString(LineSearchStatus status);
 struct LineSearchResult
 {
     LineSearchStatus status = LineSearchStatus::StepUnderflow;
-    Real step = 0;      ///< accepted t (0 unless Accepted)
-    Real energy = INF;  ///< E(u + t p) if Accepted, else E(u)
-    EnergyTerms terms;  ///< terms of the accepted energy (if Accepted)
-    int evaluations = 0; ///< energy evaluations made
+    Real step = 0;            ///< accepted t (0 unless Accepted)
+    Real energy = INF;        ///< E(u + t p) if Accepted, else E(u)
+    EnergyTerms terms;        ///< terms of the accepted energy (if Accepted)
+    int evaluations = 0;      ///< energy evaluations made
     int rejectedInfinite = 0; ///< trials rejected for +inf energy or a node outside the unit box
 
     bool isAccepted() const { return status == LineSearchStatus::Accepted; }

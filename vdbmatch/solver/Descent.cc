@@ -15,10 +15,14 @@ const char*
 toString(Status status)
 {
     switch (status) {
-    case Status::Converged: return "converged";
-    case Status::MaxIterations: return "max iterations";
-    case Status::LineSearchFailed: return "line search failed";
-    case Status::Interrupted: return "interrupted";
+    case Status::Converged:
+        return "converged";
+    case Status::MaxIterations:
+        return "max iterations";
+    case Status::LineSearchFailed:
+        return "line search failed";
+    case Status::Interrupted:
+        return "interrupted";
     }
     return "unknown";
 }
@@ -27,9 +31,12 @@ const char*
 toString(ConvergenceTest test)
 {
     switch (test) {
-    case ConvergenceTest::None: return "none";
-    case ConvergenceTest::GradientNorm: return "gradient norm";
-    case ConvergenceTest::EnergyDecrease: return "energy decrease";
+    case ConvergenceTest::None:
+        return "none";
+    case ConvergenceTest::GradientNorm:
+        return "gradient norm";
+    case ConvergenceTest::EnergyDecrease:
+        return "energy decrease";
     }
     return "unknown";
 }
@@ -78,11 +85,10 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     const SimplexLattice<D>& lattice = energy.lattice();
     const Real h = lattice.h();
     if (std::size_t(u.cols()) != lattice.nodeCount() || u.rows() != D)
-        OPENVDB_THROW(openvdb::ValueError, "Descent::run: expected " << D << " x "
-                                                                     << lattice.nodeCount()
-                                                                     << " displacements, got "
-                                                                     << u.rows() << " x "
-                                                                     << u.cols());
+        OPENVDB_THROW(openvdb::ValueError, "Descent::run: expected "
+                                               << D << " x " << lattice.nodeCount()
+                                               << " displacements, got " << u.rows() << " x "
+                                               << u.cols());
     metric.zeroDirichlet(u);
 
     Report report;
@@ -111,9 +117,9 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     Real E = gradientAt(u, g, r, terms);
     if (!std::isfinite(E)) {
         if (interrupted()) return finish(Status::Interrupted);
-        OPENVDB_THROW(openvdb::ValueError,
-                      "Descent::run: the energy of the initial guess is +inf ("
-                          << terms.invertedSimplices << " simplices with det D phi <= 0)");
+        OPENVDB_THROW(openvdb::ValueError, "Descent::run: the energy of the initial guess is +inf ("
+                                               << terms.invertedSimplices
+                                               << " simplices with det D phi <= 0)");
     }
     Real gg = metric.pairing(g, r);
     report.initialEnergy = report.energy = E;
@@ -184,8 +190,12 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         const Real ggNew = metric.pairing(gNew, rNew);
         Real beta = 0;
         switch (mOpts.update) {
-        case ConjugateGradientUpdate::SteepestDescent: beta = 0; break;
-        case ConjugateGradientUpdate::FletcherReeves: beta = gg > 0 ? ggNew / gg : 0.0; break;
+        case ConjugateGradientUpdate::SteepestDescent:
+            beta = 0;
+            break;
+        case ConjugateGradientUpdate::FletcherReeves:
+            beta = gg > 0 ? ggNew / gg : 0.0;
+            break;
         case ConjugateGradientUpdate::PolakRibierePlus:
             beta = gg > 0 ? std::max(Real(0), (ggNew - metric.pairing(g, rNew)) / gg) : 0.0;
             break;

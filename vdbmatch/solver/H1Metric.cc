@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace vdbmatch {
@@ -18,6 +19,9 @@ factorial()
 {
     return D == 2 ? 2.0 : 6.0;
 }
+
+/// Nodes per chunk of the CG vector passes (fixed, so that sums do not depend on threads).
+constexpr Eigen::Index CG_CHUNK = 4096;
 
 /// True if corner bitmasks a and b lie in a common Kuhn simplex (one is a subset of the other):
 /// exactly the nonzero entries of the element matrices.
@@ -35,20 +39,24 @@ cellSide(const SimplexLattice<D>& lattice, const typename SimplexLattice<D>::Cel
     return lattice.h() * Real(1 << cell.log2Size);
 }
 
-/// Runs body(cell, slots) for every cell, accumulating per-slot D-vectors, then gathers them per
-/// node (deterministic: fixed block order, no atomics).
+/// Runs body(cell, slots, perSlot) for every cell, accumulating per-slot D-vectors in
+/// @a perSlot (resized here; each block zeroes its own slots), then gathers them per node
+/// (deterministic: fixed block order, no atomics).
 template <int D, typename CellBody>
 void
-assemblePerNode(const SimplexLattice<D>& lattice, NodeVectors<D>& out, bool threaded,
-                const CellBody& body)
+assemblePerNode(const SimplexLattice<D>& lattice, NodeVectors<D>& out, NodeVectors<D>& perSlot,
+                bool threaded, const CellBody& body)
 {
-    NodeVectors<D> perSlot = NodeVectors<D>::Zero(D, lattice.slotNodes().size());
+    perSlot.resize(D, Eigen::Index(lattice.slotNodes().size()));
     auto blocks = [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t b = r.begin(); b != r.end(); ++b) {
             const auto& block = lattice.blocks()[b];
+            perSlot
+                .middleCols(Eigen::Index(block.slotBegin),
+                            Eigen::Index(block.slotEnd - block.slotBegin))
+                .setZero();
             for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
-                const int32_t* slots =
-                    lattice.cellSlots().data() + ci * SimplexLattice<D>::CORNERS;
+                const int32_t* slots = lattice.cellSlots().data() + ci * SimplexLattice<D>::CORNERS;
                 body(lattice.cells()[ci], slots, perSlot);
             }
         }
@@ -91,7 +99,8 @@ assemble(const SimplexLattice<D>& lattice, Real massWeight, Real stiffWeight,
             }
         }
     }
-    SparseMatrix A(Eigen::Index(size), Eigen::Index(size));
+    const auto n = Eigen::Index(size);
+    SparseMatrix A(n, n);
     A.setFromTriplets(triplets.begin(), triplets.end());
     return A;
 }
@@ -151,8 +160,7 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
     : mLattice(&lattice), mTau(tau), mOpts(opts)
 {
     if (!std::isfinite(tau) || tau < 0)
-        OPENVDB_THROW(openvdb::ValueError,
-                      "H1Metric: tau must be finite and >= 0, got " << tau);
+        OPENVDB_THROW(openvdb::ValueError, "H1Metric: tau must be finite and >= 0, got " << tau);
     const std::size_t n = lattice.nodeCount();
     mUnknown.assign(n, -1);
     for (std::size_t i = 0; i < n; ++i) {
@@ -163,10 +171,14 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
 
     bool direct = false;
     switch (opts.method) {
-    case H1MetricOptions::Method::Direct: direct = true; break;
-    case H1MetricOptions::Method::ConjugateGradient: direct = false; break;
+    case H1MetricOptions::Method::Direct:
+        direct = true;
+        break;
+    case H1MetricOptions::Method::ConjugateGradient:
+        direct = false;
+        break;
     case H1MetricOptions::Method::Auto:
-        direct = D == 2 || unknownCount() <= opts.directMaxUnknowns3D;
+        direct = unknownCount() <= (D == 2 ? opts.directMaxUnknowns2D : opts.directMaxUnknowns3D);
         break;
     }
 
@@ -182,14 +194,14 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
 
     // Jacobi preconditioner: the diagonal of G, per node.
     const auto& ref = ReferenceCellMatrices<D>::get();
-    NodeVectors<D> diag;
-    assemblePerNode<D>(lattice, diag, threaded,
+    NodeVectors<D> diag, perSlot;
+    assemblePerNode<D>(lattice, diag, perSlot, threaded,
                        [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
-                           NodeVectors<D>& perSlot) {
+                           NodeVectors<D>& acc) {
                            const Real s = cellSide(lattice, cell);
                            const Real sm = std::pow(s, D), sl = mTau * std::pow(s, D - 2);
                            for (int a = 0; a < SimplexLattice<D>::CORNERS; ++a)
-                               perSlot.col(slots[a]).array() +=
+                               acc.col(slots[a]).array() +=
                                    sm * ref.mass(a, a) + sl * ref.stiffness(a, a);
                        });
     mInverseDiagonal.setZero(Eigen::Index(n));
@@ -228,28 +240,43 @@ template <int D>
 void
 H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, bool threaded) const
 {
+    NodeVectors<D> perSlot;
+    apply(v, out, perSlot, threaded);
+}
+
+template <int D>
+void
+H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
+                   bool threaded) const
+{
     constexpr int C = SimplexLattice<D>::CORNERS;
+    using CellMatrix = typename ReferenceCellMatrices<D>::Matrix;
     const auto& ref = ReferenceCellMatrices<D>::get();
     const auto& L = *mLattice;
-    assemblePerNode<D>(
-        L, out, threaded,
-        [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
-            NodeVectors<D>& perSlot) {
-            const Real s = cellSide(L, cell);
-            const Real sm = std::pow(s, D), sl = mTau * std::pow(s, D - 2);
-            Eigen::Matrix<Real, D, C> local;
-            for (int a = 0; a < C; ++a) {
-                const int32_t node = cell.corners[a];
-                if (mUnknown[node] >= 0)
-                    local.col(a) = v.col(node);
-                else
-                    local.col(a).setZero();
-            }
-            const Eigen::Matrix<Real, C, C> K = sm * ref.mass + sl * ref.stiffness;
-            const Eigen::Matrix<Real, D, C> product = local * K;
-            for (int a = 0; a < C; ++a)
-                perSlot.col(slots[a]) += product.col(a);
-        });
+    // The cell matrix depends only on the cell size: one per log2Size.
+    int maxLog2Size = 0;
+    for (const auto& cell : L.cells())
+        maxLog2Size = std::max(maxLog2Size, cell.log2Size);
+    std::vector<CellMatrix> K(std::size_t(maxLog2Size) + 1);
+    for (int s = 0; s <= maxLog2Size; ++s) {
+        const Real side = L.h() * Real(1 << s);
+        K[s] = std::pow(side, D) * ref.mass + mTau * std::pow(side, D - 2) * ref.stiffness;
+    }
+    assemblePerNode<D>(L, out, perSlot, threaded,
+                       [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
+                           NodeVectors<D>& acc) {
+                           Eigen::Matrix<Real, D, C> local;
+                           for (int a = 0; a < C; ++a) {
+                               const int32_t node = cell.corners[a];
+                               if (mUnknown[node] >= 0)
+                                   local.col(a) = v.col(node);
+                               else
+                                   local.col(a).setZero();
+                           }
+                           const Eigen::Matrix<Real, D, C> product = local * K[cell.log2Size];
+                           for (int a = 0; a < C; ++a)
+                               acc.col(slots[a]) += product.col(a);
+                       });
     zeroDirichlet(out);
 }
 
@@ -259,8 +286,8 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out, bool thr
 {
     const std::size_t n = mLattice->nodeCount();
     if (std::size_t(g.cols()) != n)
-        OPENVDB_THROW(openvdb::ValueError, "H1Metric::applyInverse: expected "
-                                               << n << " node values, got " << g.cols());
+        OPENVDB_THROW(openvdb::ValueError,
+                      "H1Metric::applyInverse: expected " << n << " node values, got " << g.cols());
     out.setZero(D, Eigen::Index(n));
     if (unknownCount() == 0) return {};
     if (!mFactor) return solveCg(g, out, threaded);
@@ -280,18 +307,45 @@ MetricSolveInfo
 H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const
 {
     // Jacobi-preconditioned CG, the D components iterated together (one operator application
-    // per iteration serves all of them); a converged component is frozen.
+    // per iteration serves all of them); a converged component is frozen. The vector updates
+    // are fused into two passes over the nodes, in parallel over fixed chunks whose partial sums
+    // are added in chunk order (independent of the thread count).
     using Col = Vec<D>;
-    auto dots = [](const NodeVectors<D>& a, const NodeVectors<D>& b) -> Col {
-        return a.cwiseProduct(b).rowwise().sum();
+    const Eigen::Index n = x.cols();
+    const Eigen::Index chunks = (n + CG_CHUNK - 1) / CG_CHUNK;
+    std::vector<Eigen::Matrix<Real, D, 3>> partial(static_cast<std::size_t>(chunks));
+    // Runs body(begin, end, partialSums) per chunk; returns the D x 3 sums in chunk order.
+    auto pass = [&](const auto& body) {
+        auto run = [&](const tbb::blocked_range<Eigen::Index>& r) {
+            for (Eigen::Index c = r.begin(); c != r.end(); ++c) {
+                partial[c].setZero();
+                body(c * CG_CHUNK, std::min(n, (c + 1) * CG_CHUNK), partial[c]);
+            }
+        };
+        const tbb::blocked_range<Eigen::Index> range(0, chunks, 1);
+        if (threaded)
+            tbb::parallel_for(range, run);
+        else
+            run(range);
+        Eigen::Matrix<Real, D, 3> sum = Eigen::Matrix<Real, D, 3>::Zero();
+        for (const auto& p : partial)
+            sum += p;
+        return sum;
     };
-    NodeVectors<D> r = g;
-    zeroDirichlet(r);
-    const Col bNorm = dots(r, r).cwiseSqrt();
-    NodeVectors<D> z = r * mInverseDiagonal.asDiagonal();
-    NodeVectors<D> p = z, q;
-    Col rz = dots(r, z);
-    Col rNorm = bNorm;
+    const auto& invDiag = mInverseDiagonal;
+    NodeVectors<D> r(D, n), z(D, n), p(D, n), q, perSlot;
+    // r = g (Dirichlet entries 0), z = p = D^{-1} r; sums: |r|^2, r.z
+    auto sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
+        for (Eigen::Index i = b; i < e; ++i) {
+            r.col(i) = invDiag[i] != 0 ? Col(g.col(i)) : Col::Zero();
+            z.col(i) = invDiag[i] * r.col(i);
+            p.col(i) = z.col(i);
+            acc.col(0) += r.col(i).cwiseProduct(r.col(i));
+            acc.col(1) += r.col(i).cwiseProduct(z.col(i));
+        }
+    });
+    const Col bNorm = sums.col(0).cwiseSqrt();
+    Col rNorm = bNorm, rz = sums.col(1);
     MetricSolveInfo info;
     auto done = [&](int c) { return !(rNorm[c] > mOpts.cgTolerance * bNorm[c]); };
     auto allDone = [&] {
@@ -300,21 +354,32 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) 
         return true;
     };
     while (!allDone() && info.iterations < mOpts.cgMaxIterations) {
-        apply(p, q, threaded);
-        const Col pq = dots(p, q);
+        apply(p, q, perSlot, threaded);
+        const Col pq = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
+                           for (Eigen::Index i = b; i < e; ++i)
+                               acc.col(0) += p.col(i).cwiseProduct(q.col(i));
+                       }).col(0);
         Col alpha;
         for (int c = 0; c < D; ++c)
             alpha[c] = done(c) || !(pq[c] > 0) ? 0.0 : rz[c] / pq[c];
-        x += alpha.asDiagonal() * p;
-        r -= alpha.asDiagonal() * q;
-        z = r * mInverseDiagonal.asDiagonal();
-        const Col rzNew = dots(r, z);
-        rNorm = dots(r, r).cwiseSqrt();
+        sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
+            for (Eigen::Index i = b; i < e; ++i) {
+                x.col(i) += alpha.cwiseProduct(p.col(i));
+                r.col(i) -= alpha.cwiseProduct(q.col(i));
+                z.col(i) = invDiag[i] * r.col(i);
+                acc.col(0) += r.col(i).cwiseProduct(r.col(i));
+                acc.col(1) += r.col(i).cwiseProduct(z.col(i));
+            }
+        });
+        rNorm = sums.col(0).cwiseSqrt();
         Col beta;
         for (int c = 0; c < D; ++c)
-            beta[c] = rz[c] > 0 ? rzNew[c] / rz[c] : 0.0;
-        p = z + beta.asDiagonal() * p;
-        rz = rzNew;
+            beta[c] = rz[c] > 0 ? sums(c, 1) / rz[c] : 0.0;
+        rz = sums.col(1);
+        pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>&) {
+            for (Eigen::Index i = b; i < e; ++i)
+                p.col(i) = z.col(i) + beta.cwiseProduct(p.col(i));
+        });
         ++info.iterations;
     }
     info.converged = allDone();

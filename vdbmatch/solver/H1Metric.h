@@ -16,20 +16,35 @@
 /// ||g||_{G^{-1}} = sqrt(g.r) is the metric norm of the gradient.
 ///
 /// @note The paper says "weighted H^1 metric" and gives no weight. The default is
-/// tau = DEFAULT_METRIC_TAU_FACTOR * sigma^2 with sigma = 2h the band half-width of the level
-/// (see below): the descent direction is the gradient smoothed over a length sqrt(tau) ~ sigma,
-/// the scale of the band terms at that level. Coarser scales are handled by the coarser levels.
+/// tau = DEFAULT_METRIC_TAU_FACTOR * sigma^2 = sigma^2 / 2 = 2 h^2, with sigma = 2h the band
+/// half-width of the level: (1 + tau |k|^2)^{-1}, the symbol of G^{-1} M, agrees to first order
+/// in |k|^2 with the Gaussian filter exp(-sigma^2 |k|^2 / 2) of standard deviation sigma, so the
+/// descent direction is the L2 gradient smoothed over the scale of the band terms of the level;
+/// coarser scales are handled by the coarser levels. Measured (tests/solver/TestDescent.cc
+/// problems): factors 0.125 to 8 give final energies within 0.5% of each other; 0.5 gave the
+/// lowest, 0.125 the cheapest metric solves (half the CG iterations).
 ///
 /// Two solvers for G^{-1}, selected by H1MetricOptions::method:
 /// - Direct: Eigen::SimplicialLDLT of G on the interior nodes (AMD ordering), factorised once
 ///   when the metric is built and reused for every call and every component. Exact.
 /// - ConjugateGradient: matrix-free, Jacobi-preconditioned CG on all D components at once,
 ///   applying G cell by cell in parallel over the lattice blocks (no matrix stored). Because
-///   tau = O(h^2), G is spectrally equivalent to the lumped mass matrix and the iteration count
-///   is bounded independently of the level (about 10-20 for a relative residual of 1e-8).
-/// Auto takes Direct in 2D and in 3D up to DEFAULT_DIRECT_MAX_UNKNOWNS_3D interior nodes, CG
-/// beyond (measured: the 3D factorisation at level 6, 250k unknowns, already takes ~?s and ~?MB;
-/// at level 7 it would need several GB; see docs/numerics.md).
+///   tau = O(h^2), G is spectrally equivalent to the mass matrix and the iteration count does
+///   not grow with the level: 28 (2D) to 32 (3D) iterations for a relative residual of 1e-6
+///   with the default tau (16 with tau = sigma^2/8).
+/// Auto factorises up to DEFAULT_DIRECT_MAX_UNKNOWNS_2D / _3D interior nodes and uses CG beyond.
+/// Measured on dense lattices (Release, 2 cores; factorisation time and peak memory, then time
+/// per solve of all D components, CG at 1e-6):
+///   2D level 8,   65k unknowns: LDLT 0.35 s,  92 MB, 0.024 s/solve; CG 0.033 s/solve
+///   2D level 9,  261k unknowns: LDLT 2.3 s,  273 MB, 0.12 s/solve;  CG 0.16 s/solve
+///   2D level 10,  1M unknowns: LDLT 45 s,  1.1 GB, 0.66 s/solve;  CG 0.83 s/solve, 300 MB
+///   3D level 4,  3.4k unknowns: LDLT 0.05-0.13 s, 0.003 s/solve;   CG 0.007 s/solve
+///   3D level 5,   30k unknowns: LDLT 8.5 s,  194 MB, 0.15 s/solve;  CG 0.06 s/solve
+///   3D level 6,  250k unknowns: LDLT > 10 min (stopped);            CG 0.50 s/solve, 123 MB
+///   3D level 7,  2.0M unknowns: LDLT not feasible (fill ~ n^{4/3});  CG 4.6 s/solve, 715 MB
+/// (the 3D fill of SimplicialLDLT makes it useless beyond level 4). In 3D one CG solve costs
+/// about 2-3 energy-gradient evaluations of the same lattice: the metric is about half of the
+/// descent's time there.
 ///
 /// Thread-safety: a built metric is immutable; apply() and applyInverse() may be called
 /// concurrently. Results do not depend on the number of threads.
@@ -55,17 +70,20 @@ using SparseMatrix = Eigen::SparseMatrix<Real>;
 /// Not given by the paper; 1/2 is the "sigma^2/2" filter of heat-kernel smoothing of width
 /// sigma, i.e. tau = 2h^2 for sigma = 2h.
 constexpr Real DEFAULT_METRIC_TAU_FACTOR = 0.5;
-/// Auto method: largest number of interior nodes factorised directly in 3D.
-constexpr std::size_t DEFAULT_DIRECT_MAX_UNKNOWNS_3D = 40000;
+/// Auto method: largest number of interior nodes factorised directly, in 2D and in 3D
+/// (measured costs in the file comment).
+constexpr std::size_t DEFAULT_DIRECT_MAX_UNKNOWNS_2D = 300000;
+constexpr std::size_t DEFAULT_DIRECT_MAX_UNKNOWNS_3D = 5000;
 
 struct H1MetricOptions
 {
     enum class Method { Auto, Direct, ConjugateGradient };
     Method method = Method::Auto;
-    /// Auto: 3D lattices with more interior nodes than this use CG.
+    /// Auto: lattices with more interior nodes than this use CG.
+    std::size_t directMaxUnknowns2D = DEFAULT_DIRECT_MAX_UNKNOWNS_2D;
     std::size_t directMaxUnknowns3D = DEFAULT_DIRECT_MAX_UNKNOWNS_3D;
     /// CG: stop when ||G x - g||_2 <= cgTolerance * ||g||_2, per component.
-    Real cgTolerance = 1e-8;
+    Real cgTolerance = 1e-6;
     /// CG: iteration limit (the result is then the last iterate, still a descent direction).
     int cgMaxIterations = 1000;
 };
@@ -131,20 +149,23 @@ public:
     /// Sets the Dirichlet columns of v to 0.
     void zeroDirichlet(NodeVectors<D>& v) const;
 
-    /// G on the interior nodes (unknown numbering), assembled only for the direct method;
-    /// assembled on demand otherwise.
+    /// G on the interior nodes (unknown numbering), assembled at each call (the direct method
+    /// factorises it once, at construction; CG never assembles it).
     SparseMatrix matrix() const;
 
 private:
     using Factor = Eigen::SimplicialLDLT<SparseMatrix>;
 
     MetricSolveInfo solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const;
+    /// apply() with a caller-owned per-slot buffer (reused across CG iterations).
+    void apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
+               bool threaded) const;
 
     const SimplexLattice<D>* mLattice;
     Real mTau;
     H1MetricOptions mOpts;
-    std::vector<int32_t> mUnknown;       ///< per node: unknown index or -1
-    std::vector<int32_t> mInteriorNodes; ///< per unknown: node index
+    std::vector<int32_t> mUnknown;                           ///< per node: unknown index or -1
+    std::vector<int32_t> mInteriorNodes;                     ///< per unknown: node index
     Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per node, 0 on Dirichlet nodes
     std::unique_ptr<Factor> mFactor;
 };

@@ -1,0 +1,99 @@
+/// @file MultiscaleDriver.cc
+#include "MultiscaleDriver.h"
+
+#include <vdbmatch/energy/Energy.h>
+#include <vdbmatch/multiscale/Prolongation.h>
+
+#include <openvdb/Exceptions.h>
+
+#include <cmath>
+
+namespace vdbmatch {
+namespace multiscale {
+
+MultiscaleOptions
+MultiscaleOptions::defaults(int dim)
+{
+    MultiscaleOptions opts;
+    opts.energy = EnergyParameters::defaults(dim);
+    opts.minLevel = 4;
+    opts.maxLevel = dim == 2 ? 9 : 8;
+    return opts;
+}
+
+void
+MultiscaleOptions::validate() const
+{
+    if (minLevel < 1 || maxLevel < minLevel)
+        OPENVDB_THROW(openvdb::ValueError, "MultiscaleOptions: need 1 <= minLevel <= maxLevel, got "
+                                               << minLevel << ", " << maxLevel);
+    if (!(metricTauFactor >= 0) || !std::isfinite(metricTauFactor))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: metricTauFactor must be finite and >= 0, got "
+                          << metricTauFactor);
+    energy.validate();
+    descent.validate();
+}
+
+template <int D>
+bool
+MultiscaleResult<D>::isComplete() const
+{
+    return !isInterrupted() && lattice && !reports.empty();
+}
+
+template <int D> MultiscaleDriver<D>::MultiscaleDriver(const MultiscaleOptions& opts) : mOpts(opts)
+{
+    mOpts.validate();
+}
+
+template <int D>
+MultiscaleResult<D>
+MultiscaleDriver<D>::run(const LevelBuilder<D>& levels, const solver::IterationObserver& observer,
+                         bool threaded, openvdb::util::NullInterrupter* interrupter) const
+{
+    MultiscaleResult<D> result;
+    if (interrupter) interrupter->start("vdbmatch: multiscale descent");
+    for (int l = mOpts.minLevel; l <= mOpts.maxLevel; ++l) {
+        if (interrupter && interrupter->wasInterrupted()) {
+            // Stopped before the level started: an empty report at this level.
+            solver::Report stopped;
+            stopped.level = l;
+            stopped.status = solver::Status::Interrupted;
+            result.reports.push_back(stopped);
+            break;
+        }
+        const Level<D> in = levels(l);
+        if (!in.lattice || !in.shape1 || !in.shape2)
+            OPENVDB_THROW(openvdb::ValueError,
+                          "MultiscaleDriver::run: level " << l << " lacks a lattice or a shape");
+        if (in.lattice->level() != l)
+            OPENVDB_THROW(openvdb::ValueError, "MultiscaleDriver::run: the lattice of level "
+                                                   << l << " has level " << in.lattice->level());
+
+        NodeVectors<D> u = result.lattice ? prolongate<D>(*result.lattice, result.displacement,
+                                                          *in.lattice, threaded)
+                                          : NodeVectors<D>::Zero(D, in.lattice->nodeCount());
+
+        const Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
+        const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();
+        const solver::H1Metric<D> metric(*in.lattice, tau, mOpts.metric, threaded);
+        const solver::Descent<D> descent(energy, metric, mOpts.descent);
+        const solver::Report report = descent.run(u, observer, threaded, interrupter);
+
+        result.lattice = in.lattice;
+        result.displacement = std::move(u);
+        result.reports.push_back(report);
+        if (report.status == solver::Status::Interrupted) break;
+    }
+    if (interrupter) interrupter->end();
+    return result;
+}
+
+template struct MultiscaleResult<2>;
+template struct MultiscaleResult<3>;
+template class MultiscaleDriver<2>;
+template class MultiscaleDriver<3>;
+
+} // namespace multiscale
+} // namespace vdbmatch

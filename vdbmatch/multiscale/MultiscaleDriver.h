@@ -1,0 +1,105 @@
+/// @file MultiscaleDriver.h
+/// @brief The multiscale descent of paper sec:numerics: for l = lmin..lmax, descend on level l
+///        from the prolongated result of level l-1 (the identity at lmin).
+///
+/// The caller provides, per level, the lattice and the two shape samplers (a LevelBuilder
+/// callback); at level l the driver builds the Energy (sigma = sigmaFactor h_l = 2 h_l and the
+/// volume weight c_vol sigma^theta, see Energy), the H1Metric with tau = tauFactor sigma^2, and
+/// runs the Descent. The displacement of the previous level is prolongated exactly
+/// (Prolongation.h), so det D phi > 0 carries over.
+///
+/// A level that ends with MaxIterations or LineSearchFailed is not an error: the next level
+/// starts from its result (a finer level can usually continue). An interrupted level stops the
+/// run; the result then holds the displacement of that level.
+/// @see paper sec:numerics, tab:parameters
+#pragma once
+
+#include <vdbmatch/Parameters.h>
+#include <vdbmatch/geometry/FieldSampler.h>
+#include <vdbmatch/lattice/SimplexLattice.h>
+#include <vdbmatch/solver/Descent.h>
+#include <vdbmatch/solver/H1Metric.h>
+
+#include <openvdb/util/NullInterrupter.h>
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace vdbmatch {
+namespace multiscale {
+
+/// The inputs of one level. The shapes are sampled at x and phi(x) for x in the lattice's
+/// cells: their coverage must include the closed unit box.
+template <int D> struct Level
+{
+    std::shared_ptr<const SimplexLattice<D>> lattice;
+    std::shared_ptr<const FieldSampler<D>> shape1; ///< fields of M1 (source)
+    std::shared_ptr<const FieldSampler<D>> shape2; ///< fields of M2 (target)
+};
+
+/// Builds the inputs of level l (called once per level, in increasing order, on the calling
+/// thread). Signature: Level<D>(int level).
+template <int D> using LevelBuilder = std::function<Level<D>(int)>;
+
+struct MultiscaleOptions
+{
+    int minLevel = 4; ///< lmin (tab:parameters: 4)
+    int maxLevel = 8; ///< lmax (tab:parameters: 8 in 3D, 9 in 2D)
+    EnergyParameters energy = EnergyParameters::defaults(3);
+    EnergyKind kind = EnergyKind::Symmetric;
+    /// Metric weight tau = metricTauFactor * sigma^2 (H1Metric.h).
+    Real metricTauFactor = solver::DEFAULT_METRIC_TAU_FACTOR;
+    solver::H1MetricOptions metric;
+    solver::DescentOptions descent;
+
+    /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
+    static MultiscaleOptions defaults(int dim);
+    /// Throws openvdb::ValueError naming the first invalid field.
+    void validate() const;
+};
+
+template <int D> struct MultiscaleResult
+{
+    /// Lattice of the last level run and the displacement on it (D x nodeCount, Omega units).
+    std::shared_ptr<const SimplexLattice<D>> lattice;
+    NodeVectors<D> displacement;
+    /// One report per level run, coarsest first.
+    std::vector<solver::Report> reports;
+
+    /// True if every level ran and none was interrupted.
+    bool isComplete() const;
+    bool isInterrupted() const
+    {
+        return !reports.empty() && reports.back().status == solver::Status::Interrupted;
+    }
+};
+
+template <int D> class MultiscaleDriver
+{
+public:
+    /// @throw openvdb::ValueError if the options are invalid
+    explicit MultiscaleDriver(const MultiscaleOptions& opts);
+
+    const MultiscaleOptions& options() const { return mOpts; }
+
+    /// Runs levels minLevel..maxLevel.
+    /// @param levels       inputs per level; lattice(l).level() must be l
+    /// @param observer     per-iteration progress (IterationInfo::level tells the level)
+    /// @param threaded     forwarded to the energy, metric, descent and prolongation
+    /// @param interrupter  checked between levels and forwarded to the descent
+    /// @throw openvdb::ValueError if a level's inputs are missing or inconsistent, and from
+    ///        Energy / Descent (e.g. fields that do not cover the unit box).
+    MultiscaleResult<D> run(const LevelBuilder<D>& levels,
+                            const solver::IterationObserver& observer = {}, bool threaded = true,
+                            openvdb::util::NullInterrupter* interrupter = nullptr) const;
+
+private:
+    MultiscaleOptions mOpts;
+};
+
+extern template class MultiscaleDriver<2>;
+extern template class MultiscaleDriver<3>;
+
+} // namespace multiscale
+} // namespace vdbmatch
