@@ -3,6 +3,7 @@
 /// kernels (value, derivatives) used by the energy assembly.
 /// @see paper [eq:defSi], [eq:EsymBend]
 
+#include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 
 #include <tbb/blocked_range.h>
@@ -27,20 +28,7 @@ constexpr double MAX_NODE_COORD = 1.0e9;
 constexpr double HALF = 0.5;
 constexpr double THREE_QUARTERS = 0.75;
 
-template <typename Func>
-void
-forEachIndex(size_t count, bool threaded, const Func& func)
-{
-    if (threaded) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, count), [&](const auto& range) {
-            for (size_t i = range.begin(); i != range.end(); ++i)
-                func(i);
-        });
-    } else {
-        for (size_t i = 0; i != count; ++i)
-            func(i);
-    }
-}
+using detail::forEachIndex;
 
 inline void
 splineWeights(double t, double* w)

@@ -3,6 +3,7 @@
 /// signed-distance grid, with optional binomial smoothing of the Hessian field.
 /// @see paper [subsec:notation], [eq:defSi]
 
+#include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/ShapeFields.h>
 
 #include <openvdb/tools/Diagnostics.h>
@@ -30,20 +31,7 @@ constexpr double TRANSFORM_TOLERANCE = 1e-9;
 constexpr double BINOMIAL_SIDE = 0.25;
 constexpr double BINOMIAL_CENTER = 0.5;
 
-template <typename Func>
-void
-forEachIndex(size_t count, bool threaded, const Func& func)
-{
-    if (threaded) {
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, count), [&](const auto& range) {
-            for (size_t i = range.begin(); i != range.end(); ++i)
-                func(i);
-        });
-    } else {
-        for (size_t i = 0; i != count; ++i)
-            func(i);
-    }
-}
+using detail::forEachIndex;
 
 /// Node layout inside a block of 8^D nodes: x fastest.
 template <int D> struct BlockLayout
