@@ -74,7 +74,8 @@ packSym(const Mat<D>& M, Eigen::Matrix<Real, D*(D + 1) / 2, 1>& out)
 {
     int k = 0;
     for (int i = 0; i < D; ++i)
-        for (int j = i; j < D; ++j) out[k++] = M(i, j);
+        for (int j = i; j < D; ++j)
+            out[k++] = M(i, j);
 }
 
 template <int D>
@@ -83,7 +84,8 @@ unpackSym(const Eigen::Matrix<Real, D*(D + 1) / 2, 1>& in, Mat<D>& M)
 {
     int k = 0;
     for (int i = 0; i < D; ++i)
-        for (int j = i; j < D; ++j) M(i, j) = M(j, i) = in[k++];
+        for (int j = i; j < D; ++j)
+            M(i, j) = M(j, i) = in[k++];
 }
 
 } // namespace
@@ -97,7 +99,8 @@ Energy<D>::centroid(std::size_t ci, std::size_t p) const
     const Real side = h * Real(1 << cell.log2Size);
     const auto& path = KuhnSplit<D>::path()[p];
     Vec<D> x = Vec<D>::Zero(), origin;
-    for (int a = 0; a < D; ++a) origin[a] = cell.origin[a] * h;
+    for (int a = 0; a < D; ++a)
+        origin[a] = cell.origin[a] * h;
     for (int m = 0; m <= D; ++m)
         for (int a = 0; a < D; ++a)
             if (path[m] & (1 << a)) x[a] += 1.0;
@@ -133,7 +136,8 @@ Energy<D>::cacheSourceGeometry()
                       });
     // Pass 2: slots in block order, then the frames, in parallel.
     std::vector<std::size_t> offset(count.size() + 1, 0);
-    for (std::size_t b = 0; b < count.size(); ++b) offset[b + 1] = offset[b] + count[b];
+    for (std::size_t b = 0; b < count.size(); ++b)
+        offset[b + 1] = offset[b] + count[b];
     mSource.resize(offset.back());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, L.blocks().size(), 1),
                       [&](const tbb::blocked_range<std::size_t>& r) {
@@ -177,7 +181,6 @@ Energy<D>::sourceFrame(std::size_t simplex, const Vec<D>& x, kinematics::Surface
         kinematics::makeFrame(raw, f);
     }
 }
-
 
 template <int D>
 template <bool Grad>
