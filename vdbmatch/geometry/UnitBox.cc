@@ -2,6 +2,8 @@
 /// @brief Placement of the shapes in Omega and resampling of level sets as distances in Omega.
 #include "UnitBox.h"
 
+#include "Surface.h"
+
 #include <openvdb/tools/ChangeBackground.h>
 #include <openvdb/tools/MeshToVolume.h>
 #include <openvdb/tools/VolumeToMesh.h>
@@ -369,7 +371,10 @@ UnitBoxPlacement::fromWorldBox(const openvdb::BBoxd& worldBox, double margin)
     }
     const openvdb::Vec3d extents = valid ? worldBox.extents() : openvdb::Vec3d(0.0);
     const double side = std::max({extents[0], extents[1], extents[2]});
-    if (!valid || worldBox.empty() || !(side > 0.0)) {
+    const bool empty =
+        valid && (worldBox.min()[0] > worldBox.max()[0] || worldBox.min()[1] > worldBox.max()[1] ||
+                  worldBox.min()[2] > worldBox.max()[2]);
+    if (!valid || empty || !(side > 0.0)) {
         std::ostringstream s;
         s << "UnitBoxPlacement::fromWorldBox: expected a non-degenerate finite box, got "
           << worldBox;
@@ -414,6 +419,21 @@ placeInUnitBox(const openvdb::FloatGrid& source, const openvdb::FloatGrid& targe
     box.expand(zeroLevelSetWorldBox(target));
     return UnitBoxPlacement::fromWorldBox(box, margin);
 }
+
+template <int D>
+UnitBoxPlacement
+placeInUnitBox(const Surface<D>& source, const Surface<D>& target, double margin)
+{
+    if (source.points.empty() || target.points.empty()) {
+        OPENVDB_THROW(openvdb::ValueError, "placeInUnitBox: a surface has no points");
+    }
+    openvdb::BBoxd box = boundingBox(source);
+    box.expand(boundingBox(target));
+    return UnitBoxPlacement::fromWorldBox(box, margin);
+}
+
+template UnitBoxPlacement placeInUnitBox<2>(const Surface<2>&, const Surface<2>&, double);
+template UnitBoxPlacement placeInUnitBox<3>(const Surface<3>&, const Surface<3>&, double);
 
 openvdb::FloatGrid::Ptr
 resampleToUnitBox(const openvdb::FloatGrid& levelSet, const UnitBoxPlacement& placement, int level,

@@ -12,7 +12,9 @@
 ///
 /// Spaces and units: "world" is the world space of the input grids (any linear transform with
 /// cubic voxels); "unit" is Omega. Distances scale by s. Signed distances are negative inside.
-/// @note 3D only for now; 2D inputs (a slice of a grid) come later.
+/// In 2D the shapes are curves in the plane z = 0: their box is flat in z, the placement scales
+/// by the largest of the x and y sides, and only the x and y coordinates are used (see
+/// Surface.h, transformed()).
 /// @see paper eq:biSobolevDir, sec:numerics
 #pragma once
 
@@ -20,6 +22,8 @@
 #include <openvdb/util/NullInterrupter.h>
 
 namespace vdbmatch {
+
+template <int D> struct Surface;
 
 /// Default margin of the placement (Omega units, on every side of the union box).
 /// @note The paper gives no value; 0.2 leaves room for the narrow band and for the deformation
@@ -47,8 +51,10 @@ struct UnitBoxPlacement
     double toWorldLength(double unitLength) const { return unitLength / scale; }
 
     /// The placement that maps @a worldBox into [margin, 1 - margin]^3: its largest side becomes
-    /// 1 - 2 margin, its centre (1/2, 1/2, 1/2).
-    /// @throw openvdb::ValueError if the box is empty, degenerate (largest side 0) or not finite,
+    /// 1 - 2 margin, its centre (1/2, 1/2, 1/2). A box flat along some axes (a 2D box has
+    /// min z = max z) is accepted.
+    /// @throw openvdb::ValueError if the box is empty (min > max on an axis), degenerate
+    /// (largest side 0) or not finite,
     /// or margin is not in [0, 0.5).
     static UnitBoxPlacement fromWorldBox(const openvdb::BBoxd& worldBox,
                                          double margin = DEFAULT_UNIT_BOX_MARGIN);
@@ -64,6 +70,14 @@ openvdb::BBoxd zeroLevelSetWorldBox(const openvdb::FloatGrid& levelSet);
 /// The common placement of two shapes: fromWorldBox of the union of their zeroLevelSetWorldBox.
 /// @throw openvdb::ValueError as zeroLevelSetWorldBox and fromWorldBox
 UnitBoxPlacement placeInUnitBox(const openvdb::FloatGrid& source, const openvdb::FloatGrid& target,
+                                double margin = DEFAULT_UNIT_BOX_MARGIN);
+
+/// The common placement of two explicit shapes (world units): fromWorldBox of the union of
+/// their point bounding boxes (2D: z = 0, so the union box is mapped into
+/// [margin, 1 - margin]^2, centred at (1/2, 1/2)).
+/// @throw openvdb::ValueError if a surface has no points, or as fromWorldBox
+template <int D>
+UnitBoxPlacement placeInUnitBox(const Surface<D>& source, const Surface<D>& target,
                                 double margin = DEFAULT_UNIT_BOX_MARGIN);
 
 /// Smallest band width accepted by resampleToUnitBox, voxels (OpenVDB's level set half width).

@@ -2,19 +2,18 @@
 /// @brief Reading and checking input level sets, atomic .vdb writes.
 #include "LevelSetIO.h"
 
+#include "AtomicFile.h"
+
 #include <openvdb/io/File.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <exception>
-#include <fcntl.h>
 #include <filesystem>
 #include <limits>
 #include <sstream>
 #include <system_error>
-#include <unistd.h>
 #include <vector>
 
 namespace vdbmatch {
@@ -234,43 +233,16 @@ void
 writeGridsAtomically(const std::string& path, const openvdb::GridPtrVec& grids,
                      const openvdb::MetaMap& fileMeta)
 {
-    namespace fs = std::filesystem;
-    static std::atomic<unsigned> sCounter{0};
-
-    const fs::path target(path);
-    if (target.filename().empty()) {
-        OPENVDB_THROW(openvdb::IoError,
-                      "writeGridsAtomically: " + quoted(path) + " is not a file name");
-    }
-    const fs::path temp =
-        target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                std::to_string(::getpid()) + "-" + std::to_string(sCounter++));
-    auto fail = [&](const std::string& what) {
-        std::error_code ignored;
-        fs::remove(temp, ignored);
-        OPENVDB_THROW(openvdb::IoError,
-                      "writeGridsAtomically: cannot write " + quoted(path) + ": " + what);
-    };
-
-    try {
-        openvdb::io::File file(temp.string());
-        file.write(grids, fileMeta);
-        file.close();
-    } catch (const std::exception& e) {
-        fail(e.what());
-    }
-    // Flush to disk before the rename, so that a crash leaves the old file or the new one.
-    const int fd = ::open(temp.c_str(), O_RDONLY);
-    if (fd < 0) fail("the temporary file " + quoted(temp.string()) + " was not created");
-    const bool synced = ::fsync(fd) == 0;
-    ::close(fd);
-    if (!synced) fail("cannot flush " + quoted(temp.string()) + " to disk");
-    std::error_code sizeError;
-    if (fs::file_size(temp, sizeError) == 0 || sizeError) fail("the temporary file is empty");
-
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) fail("cannot rename the temporary file (" + ec.message() + ")");
+    // openvdb::io::File writes by file name (it records grid offsets for delayed loading), so
+    // the temporary file is written through its name.
+    writeFileAtomicallyVia(
+        path,
+        [&](const std::string& tempPath) {
+            openvdb::io::File file(tempPath);
+            file.write(grids, fileMeta);
+            file.close();
+        },
+        "writeGridsAtomically");
 }
 
 } // namespace vdbmatch

@@ -1,0 +1,138 @@
+/// @file TestSurfaces.h
+/// @brief Small explicit surfaces for tests: a unit cube, a UV sphere, circles and squares, and a
+/// scratch directory per test.
+#pragma once
+
+#include <vdbmatch/geometry/Surface.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <string>
+#include <system_error>
+#include <unistd.h>
+
+namespace vdbmatch {
+namespace test {
+
+/// The cube [lo, lo + side]^3 as 12 outward-oriented triangles on 8 vertices.
+inline Surface<3>
+cubeMesh(double lo = 0.0, double side = 1.0)
+{
+    Surface<3> s;
+    for (int k = 0; k < 8; ++k) {
+        s.points.emplace_back(lo + side * (k & 1), lo + side * ((k >> 1) & 1),
+                              lo + side * ((k >> 2) & 1));
+    }
+    // Quads (outward, counter-clockwise seen from outside), split into triangles.
+    const int quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                             {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) {
+        s.elements.push_back({q[0], q[1], q[2]});
+        s.elements.push_back({q[0], q[2], q[3]});
+    }
+    return s;
+}
+
+/// A UV sphere with @a rings latitude bands and @a segments longitudes, outward-oriented.
+inline Surface<3>
+uvSphere(const Vec<3>& centre, double radius, int rings, int segments)
+{
+    Surface<3> s;
+    s.points.push_back(centre + Vec<3>(0, 0, radius));
+    for (int i = 1; i < rings; ++i) {
+        const double theta = M_PI * i / rings;
+        for (int j = 0; j < segments; ++j) {
+            const double phi = 2.0 * M_PI * j / segments;
+            s.points.push_back(centre + radius * Vec<3>(std::sin(theta) * std::cos(phi),
+                                                        std::sin(theta) * std::sin(phi),
+                                                        std::cos(theta)));
+        }
+    }
+    s.points.push_back(centre - Vec<3>(0, 0, radius));
+    const int south = int(s.points.size()) - 1;
+    auto ring = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
+    for (int j = 0; j < segments; ++j) {
+        s.elements.push_back({0, ring(1, j), ring(1, j + 1)});
+        for (int i = 1; i + 1 < rings; ++i) {
+            s.elements.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            s.elements.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+        s.elements.push_back({south, ring(rings - 1, j + 1), ring(rings - 1, j)});
+    }
+    return s;
+}
+
+/// Appends a regular polygon with n vertices inscribed in a circle (counter-clockwise, or
+/// clockwise if @a clockwise).
+inline void
+addCircle(Surface<2>& s, const Vec<2>& centre, double radius, int n, bool clockwise = false)
+{
+    const int first = int(s.points.size());
+    for (int k = 0; k < n; ++k) {
+        const double a = 2.0 * M_PI * k / n * (clockwise ? -1.0 : 1.0);
+        s.points.push_back(centre + radius * Vec<2>(std::cos(a), std::sin(a)));
+        s.elements.push_back({first + k, first + (k + 1) % n});
+    }
+}
+
+inline Surface<2>
+circle(const Vec<2>& centre, double radius, int n)
+{
+    Surface<2> s;
+    addCircle(s, centre, radius, n);
+    return s;
+}
+
+/// Number of closed loops of a curve set (each vertex on two segments).
+inline int
+countLoops(const Surface<2>& s)
+{
+    std::vector<int> parent(s.points.size());
+    for (size_t i = 0; i < parent.size(); ++i)
+        parent[i] = int(i);
+    auto find = [&](int i) {
+        while (parent[size_t(i)] != i)
+            i = parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
+        return i;
+    };
+    int loops = int(s.points.size());
+    for (const auto& e : s.elements) {
+        const int a = find(e[0]), b = find(e[1]);
+        if (a != b) {
+            parent[size_t(a)] = b;
+            --loops;
+        }
+    }
+    return loops;
+}
+
+/// A fresh directory under the system temp directory, named after the running test, removed at
+/// destruction.
+class ScratchDir
+{
+public:
+    ScratchDir()
+    {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        mPath = std::filesystem::temp_directory_path() /
+                ("vdbmatch-" + std::string(info->test_suite_name()) + "-" + info->name() + "-" +
+                 std::to_string(::getpid()));
+        std::filesystem::remove_all(mPath);
+        std::filesystem::create_directories(mPath);
+    }
+    ~ScratchDir()
+    {
+        std::error_code ec;
+        std::filesystem::remove_all(mPath, ec);
+    }
+    std::string file(const std::string& name) const { return (mPath / name).string(); }
+    const std::filesystem::path& path() const { return mPath; }
+
+private:
+    std::filesystem::path mPath;
+};
+
+} // namespace test
+} // namespace vdbmatch
