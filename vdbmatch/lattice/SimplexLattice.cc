@@ -1,13 +1,18 @@
 /// @file SimplexLattice.cc
 #include "SimplexLattice.h"
 
+#include <vdbmatch/Assert.h>
+
 #include <openvdb/Exceptions.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <functional>
+#include <memory>
 #include <numeric>
+#include <utility>
 
 namespace vdbmatch {
 
@@ -15,6 +20,25 @@ namespace {
 
 constexpr int MIN_LEVEL = 1;
 constexpr int MAX_LEVEL = 12;
+/// Nesting depth beyond which a hanging-node constraint chain is malformed (a chain climbs one
+/// cell size per step, and there are at most MAX_LEVEL + 1 sizes).
+constexpr int MAX_CONSTRAINT_DEPTH = MAX_LEVEL + 1;
+
+/// Number of trailing zero bits of c >= 0 (a large number for c = 0).
+inline int
+trailingZeros(int c)
+{
+    if (c == 0) return 8 * int(sizeof(int));
+    int k = 0;
+    while (!(c & 1)) {
+        c >>= 1;
+        ++k;
+    }
+    return k;
+}
+
+/// Outcome of classifying one node in fromCellMasks().
+enum class NodeClass : char { Regular, Hanging, Overlap, Unbalanced };
 
 template <int D>
 std::array<std::array<int, D + 1>, (D == 2 ? 2 : 6)>
@@ -134,6 +158,7 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
     const int n = 1 << level;
 
     // 1. Cells, block by block (one block per leaf node of each mask), in a fixed order.
+    std::vector<char> hasCells(masks.size(), 0);
     for (std::size_t s = 0; s < masks.size(); ++s) {
         if (!masks[s]) continue;
         const int side = 1 << s;
@@ -156,6 +181,7 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
                 }
                 c.log2Size = int(s);
                 L.mCells.push_back(c);
+                hasCells[s] = 1;
             }
             b.cellEnd = L.mCells.size();
             if (b.cellEnd > b.cellBegin) L.mBlocks.push_back(b);
@@ -234,6 +260,8 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
             }
         });
 
+    L.findHangingNodes(masks, hasCells);
+
     // 4. Gather lists: for each node, its slots in block order.
     L.mGatherBegin.assign(L.nodeCount() + 1, 0);
     for (int32_t node : L.mSlotNodes)
@@ -244,6 +272,180 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
     for (std::size_t s = 0; s < slots; ++s)
         L.mGatherSlots[fill[L.mSlotNodes[s]]++] = int32_t(s);
     return L;
+}
+
+template <int D>
+void
+SimplexLattice<D>::findHangingNodes(const std::vector<openvdb::MaskGrid::ConstPtr>& masks,
+                                    const std::vector<char>& hasCells)
+{
+    const std::size_t n = nodeCount();
+    mHangingIndex.assign(n, -1);
+    mHangingNodes.clear();
+    mConstraintOffsets.assign(1, 0);
+    mConstraintMasters.clear();
+    mConstraintWeights.clear();
+    int maxLog2Size = -1;
+    for (std::size_t s = 0; s < hasCells.size(); ++s)
+        if (hasCells[s]) maxLog2Size = int(s);
+
+    // 1. Per node, the direct constraint: a node p inside an edge or face of a cell of side
+    //    2^s (s > the trailing zeros of some coordinate of p, else p can only be a corner).
+    //    Along the "unaligned" axes (p not a multiple of 2^s) p must be the midpoint; its masters
+    //    are p rounded down / up to multiples of 2^s along those axes (edge endpoints, or the
+    //    face's min and max corners).
+    std::vector<std::array<int32_t, 2>> direct(n, {-1, -1});
+    std::vector<NodeClass> nodeClass(n, NodeClass::Regular);
+    if (maxLog2Size >= 1) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const auto& r) {
+            std::vector<std::unique_ptr<openvdb::tree::ValueAccessor<const openvdb::MaskTree>>>
+                cellAcc(std::size_t(maxLog2Size) + 1);
+            for (int s = 1; s <= maxLog2Size; ++s)
+                if (hasCells[s])
+                    cellAcc[s] =
+                        std::make_unique<openvdb::tree::ValueAccessor<const openvdb::MaskTree>>(
+                            masks[s]->tree());
+            openvdb::Int32Grid::ConstAccessor nodeAcc = mNodeIndex->getConstAccessor();
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const openvdb::Coord& p = mNodeCoords[i];
+                int k = trailingZeros(p[0]);
+                for (int a = 1; a < D; ++a)
+                    k = std::min(k, trailingZeros(p[a]));
+                for (int s = k + 1; s <= maxLog2Size; ++s) {
+                    if (!hasCells[s]) continue;
+                    const int side = 1 << s;
+                    int aligned = 0;
+                    openvdb::Coord base(0);
+                    for (int a = 0; a < D; ++a) {
+                        base[a] = p[a] >> s;
+                        if ((p[a] & (side - 1)) == 0) aligned |= 1 << a;
+                    }
+                    bool found = false;
+                    for (int sub = 0; sub < (1 << D) && !found; ++sub) {
+                        if ((sub & aligned) != sub) continue;
+                        openvdb::Coord c = base;
+                        for (int a = 0; a < D; ++a)
+                            if (sub & (1 << a)) c[a] -= 1;
+                        found = cellAcc[s]->isValueOn(c);
+                    }
+                    if (!found) continue;
+                    if (aligned == 0 || nodeClass[i] != NodeClass::Regular) {
+                        nodeClass[i] = aligned == 0 ? NodeClass::Overlap : NodeClass::Unbalanced;
+                        break;
+                    }
+                    openvdb::Coord lo = p, hi = p;
+                    for (int a = 0; a < D; ++a) {
+                        if (aligned & (1 << a)) continue;
+                        if ((p[a] & (side - 1)) != side / 2) nodeClass[i] = NodeClass::Unbalanced;
+                        lo[a] = base[a] << s;
+                        hi[a] = lo[a] + side;
+                    }
+                    if (nodeClass[i] == NodeClass::Unbalanced) break;
+                    nodeClass[i] = NodeClass::Hanging;
+                    direct[i] = {nodeAcc.getValue(lo), nodeAcc.getValue(hi)};
+                }
+            }
+        });
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+        if (nodeClass[i] == NodeClass::Overlap)
+            OPENVDB_THROW(openvdb::ValueError, "SimplexLattice::fromCellMasks: node "
+                                                   << mNodeCoords[i]
+                                                   << " lies inside a cell: overlapping cells");
+        if (nodeClass[i] == NodeClass::Unbalanced)
+            OPENVDB_THROW(openvdb::ValueError,
+                          "SimplexLattice::fromCellMasks: node "
+                              << mNodeCoords[i]
+                              << " lies inside an edge or face of a cell other than at its "
+                                 "midpoint: the cells violate the 2:1 balance");
+        VDBMATCH_ASSERT(nodeClass[i] != NodeClass::Hanging ||
+                        (direct[i][0] >= 0 && direct[i][1] >= 0));
+    }
+
+    // 2. Transitive resolution (masters of masters), in node order: each chain climbs to
+    //    strictly larger cells, so it ends at non-hanging nodes.
+    std::vector<std::pair<int32_t, Real>> terms;
+    std::function<void(int32_t, Real, int)> push = [&](int32_t node, Real w, int depth) {
+        if (depth > MAX_CONSTRAINT_DEPTH)
+            OPENVDB_THROW(openvdb::ValueError,
+                          "SimplexLattice::fromCellMasks: hanging-node constraints do not "
+                          "resolve at node "
+                              << mNodeCoords[std::size_t(node)]);
+        const auto& m = direct[std::size_t(node)];
+        if (m[0] < 0) {
+            terms.emplace_back(node, w);
+            return;
+        }
+        push(m[0], 0.5 * w, depth + 1);
+        push(m[1], 0.5 * w, depth + 1);
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+        if (direct[i][0] < 0) continue;
+        terms.clear();
+        push(int32_t(i), 1.0, 0);
+        std::sort(terms.begin(), terms.end());
+        mHangingIndex[i] = int32_t(mHangingNodes.size());
+        mHangingNodes.push_back(int32_t(i));
+        for (std::size_t t = 0; t < terms.size(); ++t) {
+            if (t > 0 && terms[t].first == terms[t - 1].first)
+                mConstraintWeights.back() += terms[t].second;
+            else {
+                mConstraintMasters.push_back(terms[t].first);
+                mConstraintWeights.push_back(terms[t].second);
+            }
+        }
+        mConstraintOffsets.push_back(mConstraintMasters.size());
+    }
+    mFreeNodeCount = 0;
+    for (std::size_t i = 0; i < n; ++i)
+        mFreeNodeCount += isFreeNode(i);
+}
+
+template <int D>
+void
+SimplexLattice<D>::expand(NodeVectors<D>& u) const
+{
+    VDBMATCH_ASSERT(std::size_t(u.cols()) == nodeCount());
+    for (std::size_t k = 0; k < mHangingNodes.size(); ++k) {
+        Vec<D> value = Vec<D>::Zero();
+        for (std::size_t j = mConstraintOffsets[k]; j < mConstraintOffsets[k + 1]; ++j)
+            value += mConstraintWeights[j] * u.col(mConstraintMasters[j]);
+        u.col(mHangingNodes[k]) = value;
+    }
+}
+
+template <int D>
+void
+SimplexLattice<D>::reduce(NodeVectors<D>& g) const
+{
+    VDBMATCH_ASSERT(std::size_t(g.cols()) == nodeCount());
+    for (std::size_t k = 0; k < mHangingNodes.size(); ++k) {
+        const Vec<D> gh = g.col(mHangingNodes[k]);
+        for (std::size_t j = mConstraintOffsets[k]; j < mConstraintOffsets[k + 1]; ++j)
+            g.col(mConstraintMasters[j]) += mConstraintWeights[j] * gh;
+        g.col(mHangingNodes[k]).setZero();
+    }
+}
+
+template <int D>
+LatticeStats
+SimplexLattice<D>::stats() const
+{
+    LatticeStats st;
+    for (const Cell& c : mCells) {
+        if (std::size_t(c.log2Size) >= st.cellsPerLog2Size.size())
+            st.cellsPerLog2Size.resize(std::size_t(c.log2Size) + 1, 0);
+        ++st.cellsPerLog2Size[std::size_t(c.log2Size)];
+    }
+    st.nodes = nodeCount();
+    st.freeNodes = freeNodeCount();
+    st.hangingNodes = hangingNodeCount();
+    for (std::size_t i = 0; i < nodeCount(); ++i)
+        st.boundaryNodes += isBoundaryNode(i);
+    st.denseNodes = 1;
+    for (int a = 0; a < D; ++a)
+        st.denseNodes *= std::size_t(resolution() + 1);
+    return st;
 }
 
 template <int D>

@@ -17,6 +17,28 @@
 /// per node in block order (results independent of the thread count).
 ///
 /// Nodes on the boundary of Omega carry the Dirichlet condition phi = Id (u = 0).
+///
+/// Hanging nodes (adaptive lattices, paper: "adaptive octree grids refined only around the
+/// shapes"). Where cells of side 2^s h meet cells of side 2^{s-1} h, some nodes of the small
+/// cells lie inside an edge or (3D) a face of a large cell. The P1 function stays continuous
+/// only if its value there is the one of the large cell's linear pieces, which fixes it in terms
+/// of the large cell's corners. With 2:1 balance (neighbouring cells differ in size by at most
+/// a factor 2 across faces, edges and corners) the only hanging nodes are
+/// - edge midpoints m = (a + b)/2 of a large edge [a, b]:      u(m) = (u(a) + u(b)) / 2;
+/// - face centres c of a large square face (3D), min corner a and max corner b:
+///   u(c) = (u(a) + u(b)) / 2.
+/// Every Kuhn simplex edge joins corners v <= w componentwise, so a square face is split along
+/// the diagonal from its min to its max corner; the face centre lies on that diagonal, the four
+/// small faces' diagonals lie inside the two large triangles (the triangulations nest), and the
+/// constrained function is exactly the large cell's linear function on the face: continuity.
+/// A master may itself be hanging (a corner of a cell of side 2^s can be an edge midpoint of a
+/// cell of side 2^{s+1}); the constraints are resolved transitively, so that every hanging node
+/// is an affine combination (weights > 0, sum 1) of non-hanging nodes only. Write P for the
+/// resulting prolongation from the free nodes (neither boundary nor hanging) to all nodes:
+/// expand() applies P to nodal vectors, reduce() applies P^T to co-vectors (gradients). A
+/// hanging node on the boundary of Omega is a Dirichlet node (its masters are boundary nodes).
+/// fromCellMasks() validates the 2:1 balance on every node (a node inside an edge or face of a
+/// cell must be its midpoint / centre) and that cells do not overlap.
 /// @see paper sec:numerics
 #pragma once
 
@@ -32,6 +54,17 @@ namespace vdbmatch {
 
 /// Nodal vector field on a lattice: column i is the value at node i.
 template <int D> using NodeVectors = Eigen::Matrix<Real, D, Eigen::Dynamic>;
+
+/// Size figures of a lattice (SimplexLattice::stats()).
+struct LatticeStats
+{
+    std::vector<std::size_t> cellsPerLog2Size; ///< [s]: number of cells of side 2^s h
+    std::size_t nodes = 0;                     ///< all nodes
+    std::size_t freeNodes = 0;     ///< unknowns of the descent: neither boundary nor hanging
+    std::size_t hangingNodes = 0;  ///< constrained nodes (boundary ones included)
+    std::size_t boundaryNodes = 0; ///< Dirichlet nodes (hanging ones included)
+    std::size_t denseNodes = 0;    ///< (2^l + 1)^D, the nodes of the dense lattice of the level
+};
 
 template <int D> class SimplexLattice
 {
@@ -54,8 +87,12 @@ public:
 
     /// Builds a lattice at level @a level from cell masks: masks[s] holds the cells of side
     /// 2^s h (voxel coordinates = origin / 2^s); null entries are skipped. Only the first D
-    /// index axes are used (2D: z = 0). Throws openvdb::ValueError for a level outside [1, 12]
-    /// or a cell outside the unit box.
+    /// index axes are used (2D: z = 0). Finds the hanging nodes and their resolved constraints
+    /// (file comment). Cost: O(nodes * sizes) tree look-ups, in parallel.
+    /// @throw openvdb::ValueError for a level outside [1, 12], a cell outside the unit box,
+    ///        overlapping cells (a node inside a cell), or cells of mixed sizes that violate the
+    ///        2:1 balance (a node inside an edge or face of a cell other than its midpoint or
+    ///        centre).
     static SimplexLattice fromCellMasks(int level,
                                         const std::vector<openvdb::MaskGrid::ConstPtr>& masks);
 
@@ -79,6 +116,35 @@ public:
     bool isBoundaryNode(std::size_t i) const;
     /// Node index at index coordinate @a ijk, or -1.
     int32_t findNode(const openvdb::Coord& ijk) const;
+
+    /// True if node i lies inside an edge or face of a larger cell (its value is constrained).
+    bool isHangingNode(std::size_t i) const { return mHangingIndex[i] >= 0; }
+    std::size_t hangingNodeCount() const { return mHangingNodes.size(); }
+    /// True if node i is an unknown of the descent: neither a boundary nor a hanging node.
+    bool isFreeNode(std::size_t i) const { return !isHangingNode(i) && !isBoundaryNode(i); }
+    std::size_t freeNodeCount() const { return mFreeNodeCount; }
+    /// The hanging nodes in increasing node order; constraint k belongs to hangingNodes()[k].
+    const std::vector<int32_t>& hangingNodes() const { return mHangingNodes; }
+    /// k such that hangingNodes()[k] = i, or -1 if node i is not hanging.
+    int32_t hangingIndex(std::size_t i) const { return mHangingIndex[i]; }
+    /// Resolved constraints, CSR over the hanging nodes: u(hangingNodes()[k]) = sum over
+    /// j in [constraintOffsets()[k], constraintOffsets()[k+1]) of
+    /// constraintWeights()[j] * u(constraintMasters()[j]). Masters are non-hanging nodes in
+    /// increasing order, weights are positive dyadic numbers summing to 1.
+    const std::vector<std::size_t>& constraintOffsets() const { return mConstraintOffsets; }
+    const std::vector<int32_t>& constraintMasters() const { return mConstraintMasters; }
+    const std::vector<Real>& constraintWeights() const { return mConstraintWeights; }
+
+    /// u <- P u: sets every hanging column of @a u (D x nodeCount) to the weighted sum of its
+    /// masters' columns; other columns unchanged. Deterministic; serial (O(hanging nodes)).
+    void expand(NodeVectors<D>& u) const;
+    /// g <- P^T g for a co-vector (e.g. an energy gradient, D x nodeCount): adds
+    /// w * g(:, hanging) to each master column, then zeroes the hanging columns. Fixed serial
+    /// order (deterministic). <reduce(g), v> = <g, expand(v)> for every v (transpose of P).
+    void reduce(NodeVectors<D>& g) const;
+
+    /// Cell and node counts.
+    LatticeStats stats() const;
 
     std::size_t cellCount() const { return mCells.size(); }
     std::size_t simplexCount() const { return mCells.size() * SIMPLICES; }
@@ -104,6 +170,9 @@ public:
 
 private:
     SimplexLattice() = default;
+    /// Classifies the nodes and resolves the hanging-node constraints (fromCellMasks()).
+    void findHangingNodes(const std::vector<openvdb::MaskGrid::ConstPtr>& masks,
+                          const std::vector<char>& hasCells);
 
     int mLevel = 0;
     Real mH = 1;
@@ -115,6 +184,12 @@ private:
     std::vector<int32_t> mCellSlots;
     std::vector<std::size_t> mGatherBegin; ///< CSR over nodes into mGatherSlots
     std::vector<int32_t> mGatherSlots;
+    std::vector<int32_t> mHangingIndex; ///< per node: index into mHangingNodes or -1
+    std::vector<int32_t> mHangingNodes;
+    std::vector<std::size_t> mConstraintOffsets{0};
+    std::vector<int32_t> mConstraintMasters;
+    std::vector<Real> mConstraintWeights;
+    std::size_t mFreeNodeCount = 0;
 };
 
 /// The Kuhn split: for simplex p of a cell, kuhnPath<D>(p)[m] is the corner bitmask of v_m and

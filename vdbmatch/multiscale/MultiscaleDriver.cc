@@ -74,6 +74,9 @@ MultiscaleDriver<D>::run(const LevelBuilder<D>& levels, const solver::IterationO
         NodeVectors<D> u = result.lattice ? prolongate<D>(*result.lattice, result.displacement,
                                                           *in.lattice, threaded)
                                           : NodeVectors<D>::Zero(D, in.lattice->nodeCount());
+        // Hanging nodes of the new lattice: their constraint values (equal to the prolongated
+        // ones up to rounding when the lattice nests in the previous one).
+        in.lattice->expand(u);
 
         const Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
         const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();

@@ -6,7 +6,10 @@
 /// callback); at level l the driver builds the Energy (sigma = sigmaFactor h_l = 2 h_l and the
 /// volume weight c_vol sigma^theta, see Energy), the H1Metric with tau = tauFactor sigma^2, and
 /// runs the Descent. The displacement of the previous level is prolongated exactly
-/// (Prolongation.h), so det D phi > 0 carries over.
+/// (Prolongation.h), so det D phi > 0 carries over, then SimplexLattice::expand sets the hanging
+/// nodes of the new lattice to their constraint values. For adaptive lattices, build level l
+/// with buildAdaptiveLattice(..., coarser = lattice of level l-1) so that it nests in the
+/// previous one: the prolongated field then already satisfies the constraints (up to rounding).
 ///
 /// A level that ends with MaxIterations or LineSearchFailed is not an error: the next level
 /// starts from its result (a finer level can usually continue). An interrupted level stops the

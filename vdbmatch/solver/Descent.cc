@@ -89,7 +89,9 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
                                                << D << " x " << lattice.nodeCount()
                                                << " displacements, got " << u.rows() << " x "
                                                << u.cols());
-    metric.zeroDirichlet(u);
+    // The initial guess in the constrained space: u = 0 on the Dirichlet nodes, hanging nodes
+    // interpolated (continuous P1 field).
+    metric.project(u);
 
     Report report;
     report.level = lattice.level();
@@ -101,7 +103,9 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         return report;
     };
 
-    // Gradient at u: g (co-vector, Dirichlet entries zeroed), r = G^{-1} g, <g, r>.
+    // Gradient at u: g (co-vector over every node, Dirichlet entries zeroed; hanging entries
+    // kept: applyInverse moves them to their masters), r = G^{-1} g expanded (r = P x), <g, r>.
+    // Every direction p is a combination of such r, so u + t p stays in the constrained space.
     NodeVectors<D> g, r, gNew, rNew, p, uNew;
     auto gradientAt = [&](const NodeVectors<D>& x, NodeVectors<D>& gx, NodeVectors<D>& rx,
                           EnergyTerms& terms) -> Real {

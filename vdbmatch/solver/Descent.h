@@ -135,8 +135,9 @@ public:
 
     const DescentOptions& options() const { return mOpts; }
 
-    /// Minimises E from the initial guess @a u (D x nodeCount, Omega units; Dirichlet columns
-    /// are set to 0), leaving the result in @a u.
+    /// Minimises E from the initial guess @a u (D x nodeCount, Omega units; projected first:
+    /// Dirichlet columns set to 0, hanging columns interpolated, H1Metric::project), leaving the
+    /// result in @a u. The unknowns are the free nodes; u stays continuous (P u form).
     /// @param observer     progress callback, may be empty
     /// @param threaded     forwarded to the energy and the metric
     /// @param interrupter  checked once per iteration and forwarded to the energy

@@ -163,10 +163,16 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
         OPENVDB_THROW(openvdb::ValueError, "H1Metric: tau must be finite and >= 0, got " << tau);
     const std::size_t n = lattice.nodeCount();
     mUnknown.assign(n, -1);
+    mDirichlet.assign(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
-        if (lattice.isBoundaryNode(i)) continue;
-        mUnknown[i] = int32_t(mInteriorNodes.size());
-        mInteriorNodes.push_back(int32_t(i));
+        if (lattice.isBoundaryNode(i)) {
+            mDirichlet[i] = 1;
+            continue;
+        }
+        mSupportNodes.push_back(int32_t(i));
+        if (lattice.isHangingNode(i)) continue;
+        mUnknown[i] = int32_t(mFreeNodes.size());
+        mFreeNodes.push_back(int32_t(i));
     }
 
     bool direct = false;
@@ -204,6 +210,19 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
                                acc.col(slots[a]).array() +=
                                    sm * ref.mass(a, a) + sl * ref.stiffness(a, a);
                        });
+    // Constrained space: diag(P^T G P) approximated by diag(G) on the free nodes plus
+    // w^2 G_hh from each hanging node h onto each of its masters m (weight w). Positive, so the
+    // preconditioner is SPD; the cross terms 2 w G_hm are left out.
+    const auto& hanging = lattice.hangingNodes();
+    for (std::size_t k = 0; k < hanging.size(); ++k) {
+        const auto hn = std::size_t(hanging[k]);
+        if (mDirichlet[hn]) continue;
+        for (std::size_t j = lattice.constraintOffsets()[k]; j < lattice.constraintOffsets()[k + 1];
+             ++j) {
+            const Real w = lattice.constraintWeights()[j];
+            diag(0, lattice.constraintMasters()[j]) += w * w * diag(0, hn);
+        }
+    }
     mInverseDiagonal.setZero(Eigen::Index(n));
     for (std::size_t i = 0; i < n; ++i)
         if (mUnknown[i] >= 0) mInverseDiagonal[i] = 1.0 / diag(0, i);
@@ -215,15 +234,46 @@ template <int D>
 SparseMatrix
 H1Metric<D>::matrix() const
 {
-    return assemble<D>(*mLattice, 1.0, mTau, &mUnknown, unknownCount());
+    const auto& L = *mLattice;
+    if (L.hangingNodeCount() == 0) return assemble<D>(L, 1.0, mTau, &mUnknown, unknownCount());
+    // P^T G P with G on every node and P: free unknowns -> nodes (identity on the free nodes,
+    // the resolved constraints on the non-Dirichlet hanging nodes, 0 on the Dirichlet nodes).
+    const SparseMatrix G = assemble<D>(L, 1.0, mTau, nullptr, L.nodeCount());
+    std::vector<Eigen::Triplet<Real>> triplets;
+    triplets.reserve(mFreeNodes.size() + L.constraintMasters().size());
+    for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
+        triplets.emplace_back(mFreeNodes[k], int32_t(k), 1.0);
+    const auto& hanging = L.hangingNodes();
+    for (std::size_t k = 0; k < hanging.size(); ++k) {
+        if (mDirichlet[std::size_t(hanging[k])]) continue;
+        for (std::size_t j = L.constraintOffsets()[k]; j < L.constraintOffsets()[k + 1]; ++j) {
+            const int32_t m = mUnknown[std::size_t(L.constraintMasters()[j])];
+            if (m >= 0) triplets.emplace_back(hanging[k], m, L.constraintWeights()[j]);
+        }
+    }
+    SparseMatrix P(Eigen::Index(L.nodeCount()), Eigen::Index(unknownCount()));
+    P.setFromTriplets(triplets.begin(), triplets.end());
+    const SparseMatrix GP = G * P;
+    SparseMatrix A = SparseMatrix(P.transpose()) * GP;
+    // Exactly symmetric (the two products round differently).
+    A = 0.5 * (A + SparseMatrix(A.transpose()));
+    return A;
 }
 
 template <int D>
 void
 H1Metric<D>::zeroDirichlet(NodeVectors<D>& v) const
 {
-    for (std::size_t i = 0; i < mUnknown.size(); ++i)
-        if (mUnknown[i] < 0) v.col(i).setZero();
+    for (std::size_t i = 0; i < mDirichlet.size(); ++i)
+        if (mDirichlet[i]) v.col(i).setZero();
+}
+
+template <int D>
+void
+H1Metric<D>::project(NodeVectors<D>& v) const
+{
+    zeroDirichlet(v);
+    mLattice->expand(v);
 }
 
 template <int D>
@@ -231,7 +281,7 @@ Real
 H1Metric<D>::pairing(const NodeVectors<D>& g, const NodeVectors<D>& v) const
 {
     Real sum = 0;
-    for (int32_t i : mInteriorNodes)
+    for (int32_t i : mSupportNodes)
         sum += g.col(i).dot(v.col(i));
     return sum;
 }
@@ -240,15 +290,22 @@ template <int D>
 void
 H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, bool threaded) const
 {
-    NodeVectors<D> perSlot;
-    apply(v, out, perSlot, threaded);
+    NodeVectors<D> perSlot, expanded;
+    apply(v, out, perSlot, expanded, threaded);
 }
 
 template <int D>
 void
-H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
-                   bool threaded) const
+H1Metric<D>::apply(const NodeVectors<D>& vIn, NodeVectors<D>& out, NodeVectors<D>& perSlot,
+                   NodeVectors<D>& expanded, bool threaded) const
 {
+    const bool hasHanging = mLattice->hangingNodeCount() > 0;
+    if (hasHanging) {
+        // P v: the free values of v, interpolated at the hanging nodes.
+        expanded = vIn;
+        project(expanded);
+    }
+    const NodeVectors<D>& v = hasHanging ? expanded : vIn;
     constexpr int C = SimplexLattice<D>::CORNERS;
     using CellMatrix = typename ReferenceCellMatrices<D>::Matrix;
     const auto& ref = ReferenceCellMatrices<D>::get();
@@ -268,7 +325,7 @@ H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>&
                            Eigen::Matrix<Real, D, C> local;
                            for (int a = 0; a < C; ++a) {
                                const int32_t node = cell.corners[a];
-                               if (mUnknown[node] >= 0)
+                               if (!mDirichlet[node])
                                    local.col(a) = v.col(node);
                                else
                                    local.col(a).setZero();
@@ -277,29 +334,45 @@ H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>&
                            for (int a = 0; a < C; ++a)
                                acc.col(slots[a]) += product.col(a);
                        });
+    // P^T (G P v), restricted to the free nodes.
+    if (hasHanging) mLattice->reduce(out);
     zeroDirichlet(out);
 }
 
 template <int D>
 MetricSolveInfo
-H1Metric<D>::applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out, bool threaded) const
+H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool threaded) const
 {
     const std::size_t n = mLattice->nodeCount();
-    if (std::size_t(g.cols()) != n)
-        OPENVDB_THROW(openvdb::ValueError,
-                      "H1Metric::applyInverse: expected " << n << " node values, got " << g.cols());
+    if (std::size_t(gIn.cols()) != n)
+        OPENVDB_THROW(openvdb::ValueError, "H1Metric::applyInverse: expected "
+                                               << n << " node values, got " << gIn.cols());
     out.setZero(D, Eigen::Index(n));
     if (unknownCount() == 0) return {};
-    if (!mFactor) return solveCg(g, out, threaded);
-
-    // All D components with one factorisation: right-hand sides as the columns of B.
-    Eigen::Matrix<Real, Eigen::Dynamic, D> B(Eigen::Index(unknownCount()), D);
-    for (std::size_t k = 0; k < mInteriorNodes.size(); ++k)
-        B.row(Eigen::Index(k)) = g.col(mInteriorNodes[k]).transpose();
-    const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(B);
-    for (std::size_t k = 0; k < mInteriorNodes.size(); ++k)
-        out.col(mInteriorNodes[k]) = X.row(Eigen::Index(k)).transpose();
-    return {};
+    // P^T g: the hanging nodes' co-vector entries moved to their masters.
+    const bool hasHanging = mLattice->hangingNodeCount() > 0;
+    NodeVectors<D> reduced;
+    if (hasHanging) {
+        reduced = gIn;
+        zeroDirichlet(reduced);
+        mLattice->reduce(reduced);
+    }
+    const NodeVectors<D>& g = hasHanging ? reduced : gIn;
+    MetricSolveInfo info;
+    if (!mFactor) {
+        info = solveCg(g, out, threaded);
+    } else {
+        // All D components with one factorisation: right-hand sides as the columns of B.
+        Eigen::Matrix<Real, Eigen::Dynamic, D> B(Eigen::Index(unknownCount()), D);
+        for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
+            B.row(Eigen::Index(k)) = g.col(mFreeNodes[k]).transpose();
+        const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(B);
+        for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
+            out.col(mFreeNodes[k]) = X.row(Eigen::Index(k)).transpose();
+    }
+    // P x: interpolated at the hanging nodes (0 at the Dirichlet nodes).
+    if (hasHanging) project(out);
+    return info;
 }
 
 template <int D>
@@ -333,7 +406,7 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) 
         return sum;
     };
     const auto& invDiag = mInverseDiagonal;
-    NodeVectors<D> r(D, n), z(D, n), p(D, n), q, perSlot;
+    NodeVectors<D> r(D, n), z(D, n), p(D, n), q, perSlot, expanded;
     // r = g (Dirichlet entries 0), z = p = D^{-1} r; sums: |r|^2, r.z
     auto sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
         for (Eigen::Index i = b; i < e; ++i) {
@@ -354,7 +427,7 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) 
         return true;
     };
     while (!allDone() && info.iterations < mOpts.cgMaxIterations) {
-        apply(p, q, perSlot, threaded);
+        apply(p, q, perSlot, expanded, threaded);
         const Col pq = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
                            for (Eigen::Index i = b; i < e; ++i)
                                acc.col(0) += p.col(i).cwiseProduct(q.col(i));

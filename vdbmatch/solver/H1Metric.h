@@ -10,6 +10,18 @@
 /// nodes only (identity rows and columns), ignores the Dirichlet values of its input and returns
 /// 0 there.
 ///
+/// Adaptive lattices (hanging nodes, SimplexLattice.h): the unknowns are the free nodes (neither
+/// Dirichlet nor hanging); a vector of unknowns x stands for the continuous P1 field P x
+/// (SimplexLattice::expand), and the metric on this constrained space is
+/// @f[ \langle x, y\rangle = (P x)^T G (P y) = x^T (P^T G P) y. @f]
+/// apply() computes P^T G P x (= reduce(G expand(x))); the direct method factorises P^T G P
+/// (assembled sparse); the CG preconditioner uses diag(G) on the free nodes plus w^2 G_hh added
+/// to each master m of a hanging node h (weight w), an SPD approximation of diag(P^T G P).
+/// applyInverse() takes the full co-vector g (every node, as Energy::valueAndGradient returns
+/// it), solves (P^T G P) x = P^T g and returns P x (hanging columns interpolated, Dirichlet 0),
+/// so that pairing(g, out) = (P^T g).x. On lattices without hanging nodes P is the identity on
+/// the interior nodes and every operation is bitwise the same as without the constraints.
+///
 /// The energy's gradient g_i = dE/du_i is a co-vector (a derivative with respect to nodal
 /// values). The H^1 gradient is the vector field r with <r, w>_G = g.w for every w, i.e.
 /// r = G^{-1} g; the steepest descent direction in the metric is -r, and
@@ -129,27 +141,38 @@ public:
     const SimplexLattice<D>& lattice() const { return *mLattice; }
     /// True if G^{-1} is applied with the sparse factorisation.
     bool isDirect() const { return bool(mFactor); }
-    /// Number of interior (non-Dirichlet) nodes.
-    std::size_t unknownCount() const { return mInteriorNodes.size(); }
-    /// Unknown index of node i, or -1 for a Dirichlet node.
+    /// Number of unknowns: free nodes (neither Dirichlet nor hanging; on lattices without
+    /// hanging nodes, the interior nodes).
+    std::size_t unknownCount() const { return mFreeNodes.size(); }
+    /// Unknown index of node i, or -1 for a Dirichlet or hanging node.
     int32_t unknown(std::size_t node) const { return mUnknown[node]; }
 
-    /// out = G v on the interior nodes, 0 on the Dirichlet nodes (their values in v are
-    /// ignored). v and out: D x nodeCount.
+    /// out = P^T G P v on the free nodes, 0 on the other nodes: the values of v at the free
+    /// nodes are used, its Dirichlet and hanging values are ignored (replaced by 0 and by the
+    /// interpolated values). Without hanging nodes: G v on the interior nodes. v and out:
+    /// D x nodeCount.
     void apply(const NodeVectors<D>& v, NodeVectors<D>& out, bool threaded = true) const;
 
-    /// out = G^{-1} g: the H^1 representative of the co-vector g (D x nodeCount; Dirichlet
-    /// entries of g ignored, of out set to 0). @a out may not alias @a g.
+    /// out = P (P^T G P)^{-1} P^T g: the H^1 representative of the co-vector g (D x nodeCount,
+    /// every node's entry as the energy gradient gives it; Dirichlet entries ignored, hanging
+    /// entries moved to their masters), expanded: 0 at the Dirichlet nodes, interpolated at the
+    /// hanging nodes. @a out may not alias @a g.
     MetricSolveInfo applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out,
                                  bool threaded = true) const;
 
-    /// The pairing g.v summed over the interior nodes (co-vector g, vector v).
+    /// The pairing g.v summed over the non-Dirichlet nodes, hanging ones included (co-vector g,
+    /// vector v). For v = P x (e.g. the output of applyInverse) it equals (P^T g).x.
     Real pairing(const NodeVectors<D>& g, const NodeVectors<D>& v) const;
 
-    /// Sets the Dirichlet columns of v to 0.
+    /// Sets the Dirichlet columns of v to 0 (for co-vectors as well as vectors).
     void zeroDirichlet(NodeVectors<D>& v) const;
 
-    /// G on the interior nodes (unknown numbering), assembled at each call (the direct method
+    /// Projects a vector onto the constrained space: Dirichlet columns to 0, then hanging
+    /// columns interpolated from their masters (SimplexLattice::expand). Use it for initial
+    /// guesses; never for co-vectors (gradients).
+    void project(NodeVectors<D>& v) const;
+
+    /// P^T G P on the free nodes (unknown numbering), assembled at each call (the direct method
     /// factorises it once, at construction; CG never assembles it).
     SparseMatrix matrix() const;
 
@@ -157,16 +180,18 @@ private:
     using Factor = Eigen::SimplicialLDLT<SparseMatrix>;
 
     MetricSolveInfo solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const;
-    /// apply() with a caller-owned per-slot buffer (reused across CG iterations).
+    /// apply() with caller-owned per-slot and expansion buffers (reused across CG iterations).
     void apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
-               bool threaded) const;
+               NodeVectors<D>& expanded, bool threaded) const;
 
     const SimplexLattice<D>* mLattice;
     Real mTau;
     H1MetricOptions mOpts;
-    std::vector<int32_t> mUnknown;                           ///< per node: unknown index or -1
-    std::vector<int32_t> mInteriorNodes;                     ///< per unknown: node index
-    Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per node, 0 on Dirichlet nodes
+    std::vector<int32_t> mUnknown;      ///< per node: unknown index or -1
+    std::vector<int32_t> mFreeNodes;    ///< per unknown: node index
+    std::vector<int32_t> mSupportNodes; ///< non-Dirichlet nodes (free and hanging), increasing
+    std::vector<char> mDirichlet;       ///< per node: 1 on the boundary of Omega
+    Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per node, 0 on non-free nodes
     std::unique_ptr<Factor> mFactor;
 };
 
