@@ -10,8 +10,12 @@
 /// k = 0 (ShapeFields reads only that layer).
 ///
 /// Methods:
-/// - 3D: tools::meshToVolume (distances to the triangles; the sign comes from a flood fill of the
-///   exterior, so the orientation of the triangles does not matter).
+/// - 3D: tools::meshToVolume (the sign comes from a flood fill of the exterior, so the
+///   orientation of the triangles does not matter; it also records the closest triangle of every
+///   voxel), then every active value is replaced by the exact distance to the triangles: the
+///   nearest of the triangles recorded for the voxel and its 26 neighbours, improved by steepest
+///   descent over triangles sharing a vertex. (meshToVolume's own values were off by up to 0.43
+///   voxel 3-4 voxels from a sphere; after this pass the error is that of the mesh.)
 /// - 2D: exact point-segment distances, per 8x8 node tile over the segments that can be nearest
 ///   (those within d(tile centre) + tile diameter of the centre); the sign by the parity of the
 ///   crossings of the row y = j h left of the node (half-open rule at vertices, so a vertex on a
@@ -93,7 +97,7 @@ buildShapeSampler(const Surface<D>& surface, int level,
                   const ShapeSamplerOptions& opts = ShapeSamplerOptions());
 
 /// Level set of a surface for output (e.g. the deformed shape) in a given transform.
-/// - 3D: tools::meshToLevelSet in the index space of @a xform (any linear transform).
+/// - 3D: the 3D method above in the index space of @a xform (linear, uniform voxels).
 /// - 2D: a slice grid k = 0 from the 2D method in the index space of @a xform, which must be a
 ///   uniform scale plus a translation (world (x, y, 0) then maps to index (i, j, k0); the slice
 ///   is written at k = 0).
@@ -101,7 +105,8 @@ buildShapeSampler(const Surface<D>& surface, int level,
 /// @param halfWidthVoxels  >= MIN_DISTANCE_HALF_WIDTH_VOXELS
 /// @return class level set, name "surface", background halfWidth * voxel size
 /// @throw openvdb::ValueError if the surface fails checkSurface, the half width is out of range,
-///        or (2D) the transform is not a uniform scale plus translation
+///        the transform is not linear with uniform voxels (3D) or not a uniform scale plus
+///        translation (2D)
 template <int D>
 openvdb::FloatGrid::Ptr
 levelSetFromSurface(const Surface<D>& worldSurface, const openvdb::math::Transform& xform,
