@@ -11,6 +11,7 @@
 #include <openvdb/Exceptions.h>
 
 #include <cmath>
+#include <limits>
 
 using namespace vdbmatch;
 
@@ -125,4 +126,20 @@ TEST(Texture, Curves)
 
     texture.angleCells = 0;
     EXPECT_THROW(paintCurve(circle, texture), openvdb::ValueError);
+}
+
+TEST(Texture, NonFinitePointsAreGrey)
+{
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    SurfaceTexture texture;
+    texture.pattern = SurfacePattern::Position;
+    const std::vector<Rgb8> colors = paintSurface({{0, 0, 0}, {nan, 0, 0}, {2, 2, 2}}, texture);
+    EXPECT_EQ(colors[1], (Rgb8{128, 128, 128}));
+    EXPECT_EQ(colors[2], (Rgb8{255, 255, 255}));
+    texture.pattern = SurfacePattern::AxisStripes;
+    texture.stripeWidth = 1e-300; // floor() far beyond the range of any integer type
+    EXPECT_NO_THROW(paintSurface({{0, 0, 0}, {1e10, 0, 0}}, texture));
+    CurveTexture curve;
+    curve.pattern = CurvePattern::ArcLengthStripes;
+    EXPECT_EQ(paintCurve({{0, 0}, {nan, 1}, {0.05, 0}}, curve)[1], (Rgb8{128, 128, 128}));
 }

@@ -41,6 +41,11 @@ renderCurves2D(const std::vector<ColoredPolyline2D>& curves,
                               " colours for " + std::to_string(c.points.size()) + " points");
         }
     }
+    if (!(options.marginFraction >= 0.0 && options.marginFraction < 0.5)) {
+        OPENVDB_THROW(openvdb::ValueError, "renderCurves2D: marginFraction " +
+                                               std::to_string(options.marginFraction) +
+                                               " is not in [0, 0.5)");
+    }
     const int ss = options.supersample ? SUPERSAMPLE : 1;
     const int W = width * ss, H = height * ss;
     const double margin = options.marginFraction * std::min(W, H);

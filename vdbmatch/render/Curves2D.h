@@ -38,7 +38,8 @@ struct Curves2DOptions
 /// Draws @a gridLines (open polylines, grey) and then @a curves into a @a width x @a height image
 /// framing the rectangle [frameMin, frameMax].
 /// @throw openvdb::ValueError if the size is not positive, the frame is empty or not finite, or
-///        a curve's colours are neither empty nor one per point
+///        a curve's colours are neither empty nor one per point, or marginFraction is not in
+///        [0, 0.5)
 Image8 renderCurves2D(const std::vector<ColoredPolyline2D>& curves,
                       const std::vector<std::vector<openvdb::Vec2d>>& gridLines,
                       const openvdb::Vec2d& frameMin, const openvdb::Vec2d& frameMax, int width,

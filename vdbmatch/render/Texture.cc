@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace vdbmatch {
@@ -13,6 +14,8 @@ namespace vdbmatch {
 namespace {
 
 constexpr double PI = 3.14159265358979323846;
+/// Grey for points with a non-finite coordinate.
+constexpr Rgb8 NON_FINITE_COLOR = {128, 128, 128};
 
 /// Band index of @a t in [0, 1) cut into @a cells equal bands; t = 1 falls into the last band.
 long
@@ -25,6 +28,13 @@ inline const Rgb8&
 pick(long index, const Rgb8& a, const Rgb8& b)
 {
     return (index % 2 == 0) ? a : b;
+}
+
+/// Colour A or B by the parity of floor(@a x), for any finite x (no integer overflow).
+const Rgb8&
+pickByFloor(double x, const Rgb8& a, const Rgb8& b)
+{
+    return std::abs(std::fmod(std::floor(x), 2.0)) < 0.5 ? a : b;
 }
 
 std::uint8_t
@@ -52,25 +62,35 @@ paintSurface(const std::vector<openvdb::Vec3d>& points, const SurfaceTexture& te
     std::vector<Rgb8> colors(points.size());
     if (points.empty()) return colors;
 
-    openvdb::Vec3d lo = points.front(), hi = points.front(), sum(0.0);
+    // Bounding box and centroid of the finite points.
+    openvdb::Vec3d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    openvdb::Vec3d sum(0.0);
+    size_t finiteCount = 0;
     for (const auto& p : points) {
+        if (!std::isfinite(p.x()) || !std::isfinite(p.y()) || !std::isfinite(p.z())) continue;
         lo = openvdb::math::minComponent(lo, p);
         hi = openvdb::math::maxComponent(hi, p);
         sum += p;
+        ++finiteCount;
     }
-    const openvdb::Vec3d centre = texture.center ? *texture.center : sum / double(points.size());
+    const openvdb::Vec3d centre =
+        texture.center ? *texture.center : sum / double(std::max<size_t>(finiteCount, 1));
     const int a = texture.axis, u = (a + 1) % 3, v = (a + 2) % 3;
 
     for (size_t i = 0; i < points.size(); ++i) {
         const openvdb::Vec3d& p = points[i];
         const openvdb::Vec3d d = p - centre;
+        if (!std::isfinite(d.x()) || !std::isfinite(d.y()) || !std::isfinite(d.z())) {
+            colors[i] = NON_FINITE_COLOR;
+            continue;
+        }
         // Longitude in [0, 1) of a turn; latitude in [0, 1] from the -axis pole to the +axis pole.
         const double longitude = (std::atan2(d[v], d[u]) + PI) / (2.0 * PI);
         const double latitude = (std::atan2(d[a], std::hypot(d[u], d[v])) + 0.5 * PI) / PI;
         switch (texture.pattern) {
         case SurfacePattern::AxisStripes: {
-            const long k = static_cast<long>(std::floor((p[a] - lo[a]) / texture.stripeWidth));
-            colors[i] = pick(k, texture.colorA, texture.colorB);
+            colors[i] =
+                pickByFloor((p[a] - lo[a]) / texture.stripeWidth, texture.colorA, texture.colorB);
             break;
         }
         case SurfacePattern::LongitudeStripes:
@@ -103,22 +123,34 @@ paintCurve(const std::vector<openvdb::Vec2d>& points, const CurveTexture& textur
     std::vector<Rgb8> colors(points.size());
     if (points.empty()) return colors;
 
-    openvdb::Vec2d lo = points.front(), hi = points.front(), sum(0.0);
+    // Bounding box and centroid of the finite points.
+    openvdb::Vec2d lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    openvdb::Vec2d sum(0.0);
+    size_t finiteCount = 0;
     for (const auto& p : points) {
+        if (!std::isfinite(p.x()) || !std::isfinite(p.y())) continue;
         lo = openvdb::Vec2d(std::min(lo.x(), p.x()), std::min(lo.y(), p.y()));
         hi = openvdb::Vec2d(std::max(hi.x(), p.x()), std::max(hi.y(), p.y()));
         sum += p;
+        ++finiteCount;
     }
-    const openvdb::Vec2d centre = texture.center ? *texture.center : sum / double(points.size());
+    const openvdb::Vec2d centre =
+        texture.center ? *texture.center : sum / double(std::max<size_t>(finiteCount, 1));
 
     double arcLength = 0.0;
     for (size_t i = 0; i < points.size(); ++i) {
         const openvdb::Vec2d& p = points[i];
-        if (i > 0) arcLength += (p - points[i - 1]).length();
+        if (!std::isfinite(p.x()) || !std::isfinite(p.y())) {
+            colors[i] = NON_FINITE_COLOR;
+            continue;
+        }
+        if (i > 0 && std::isfinite(points[i - 1].x()) && std::isfinite(points[i - 1].y())) {
+            arcLength += (p - points[i - 1]).length();
+        }
         switch (texture.pattern) {
         case CurvePattern::ArcLengthStripes:
-            colors[i] = pick(static_cast<long>(std::floor(arcLength / texture.stripeWidth)),
-                             texture.colorA, texture.colorB);
+            colors[i] =
+                pickByFloor(arcLength / texture.stripeWidth, texture.colorA, texture.colorB);
             break;
         case CurvePattern::AngleStripes: {
             const double angle =

@@ -6,6 +6,8 @@
 /// Spaces: points are world coordinates (openvdb::Vec3d / Vec2d). The centre of the spherical
 /// and angular parametrizations is the vertex average unless given. Patterns alternate between
 /// two colours, colorA and colorB, band 0 being colorA, except Position (continuous colours).
+/// Points with a non-finite coordinate get grey (128, 128, 128) and are left out of the bounding
+/// box and the centroid.
 ///
 /// Surface patterns and their periods:
 /// - AxisStripes: slabs perpendicular to world axis @a axis (0 = x, 1 = y, 2 = z); band
