@@ -6,7 +6,7 @@ PACKAGES=(
   build-essential cmake pkg-config
   libopenvdb-dev libtbb-dev libeigen3-dev libopenimageio-dev libboost-iostreams-dev
   libgtest-dev libbenchmark-dev
-  libopenvdb-tools python3-openvdb openimageio-tools clang-format
+  libopenvdb-tools python3-openvdb python3-numpy openimageio-tools clang-format time
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -83,8 +83,7 @@ check help-energy 0 'energy SOURCE' '' -- energy --help
 check version 0 '^vdb_match [0-9]+\.[0-9]+\.[0-9]+' '' -- --version
 
 # ---------------------------------------------------------------- usage errors (1)
-check no-command 1 '' 'missing command' --
-check unknown-command 1 '' "unknown command 'match'" -- match "$SPHERE" "$ELLIPSOID"
+check no-arguments 1 '' 'missing arguments' --
 check unknown-option 1 '' "unknown option '--bogus'" -- energy "$SPHERE" "$ELLIPSOID" --bogus
 check missing-value 1 '' '--level expects a value' -- energy "$SPHERE" "$ELLIPSOID" --level
 check bad-number 1 '' "--level expects an integer, got 'abc'" -- energy "$SPHERE" "$ELLIPSOID" --level abc

@@ -1,9 +1,9 @@
 /// @file Cli.h
 /// @brief The vdb_match command line: option table, parsing, help, and the subcommands.
 ///
-/// Usage: `vdb_match COMMAND [options] ARGS...`, `vdb_match --help`, `vdb_match --version`.
-/// Commands: `energy SOURCE.vdb TARGET.vdb` (energy of phi = Id). Results go to the output
-/// stream, progress and errors to the error stream (errors as one line
+/// Usage: `vdb_match [match] SOURCE TARGET -o OUTDIR [options]`,
+/// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`, `vdb_match --help`, `--version`.
+/// Results go to the output stream, progress and errors to the error stream (errors as one line
 /// `vdb_match: error: ...`). See docs/cli.md.
 #pragma once
 
@@ -58,6 +58,17 @@ EnergyOptions parseEnergyOptions(int argc, const char* const* argv, int first);
 
 /// The full help text (usage, commands, grouped options with defaults, exit codes).
 std::string helpText();
+/// The grouped option lines of `energy` and of `match`, with their defaults.
+std::string energyOptionHelp();
+std::string matchOptionHelp();
+
+/// The commands, on argv[first..argc): return the exit code; results to @a out, progress to
+/// @a err. They throw UsageError, Interrupted and library exceptions, mapped to exit codes by
+/// run().
+int runEnergyCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                     std::ostream& err);
+int runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                    std::ostream& err);
 
 /// Runs the command line and returns the exit code. Writes results to @a out and progress and
 /// errors to @a err. Installs SIGINT/SIGTERM handlers for the duration of a command.

@@ -96,6 +96,8 @@ checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
     float minActive = std::numeric_limits<float>::max();
     float maxActive = -std::numeric_limits<float>::max();
     const float minOuter = float(MIN_OUTER_LAYER_DISTANCE_VOXELS * h);
+    // A 2D shape is a slice: one layer of voxels in z, whose z faces are the slice itself.
+    const int faceAxes = activeBox.min()[2] == activeBox.max()[2] ? 2 : 3;
     for (auto leaf = grid.tree().cbeginLeaf(); leaf; ++leaf) {
         for (auto it = leaf->cbeginValueAll(); it; ++it) {
             const float d = *it;
@@ -110,7 +112,7 @@ checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
             maxActive = std::max(maxActive, d);
             const openvdb::Coord ijk = it.getCoord();
             bool onFace = false;
-            for (int a = 0; a < 3; ++a) {
+            for (int a = 0; a < faceAxes; ++a) {
                 onFace = onFace || ijk[a] == activeBox.min()[a] || ijk[a] == activeBox.max()[a];
             }
             if (onFace && d < minOuter) {

@@ -6,8 +6,8 @@
 /// of class "level set" holding a signed distance in world units, negative inside, with a narrow
 /// band of active voxels around a closed zero level set; any linear transform with uniform voxel
 /// size (scale, rotation, translation). Houdini names such grids "surface".
-/// @note 3D only for now: a 2D input (a one-voxel-thick slice) is read but will be rejected by
-///       resampleToUnitBox; 2D inputs come later.
+/// A 2D shape is a slice: a level set whose active voxels all have the same k (one layer in z);
+/// its outer-layer check (checkInputLevelSet) then looks at the x and y faces only.
 #pragma once
 
 #include <openvdb/openvdb.h>

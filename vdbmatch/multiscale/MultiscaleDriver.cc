@@ -52,6 +52,17 @@ MultiscaleResult<D>
 MultiscaleDriver<D>::run(const LevelBuilder<D>& levels, const solver::IterationObserver& observer,
                          bool threaded, openvdb::util::NullInterrupter* interrupter) const
 {
+    return run([&levels](const LevelContext<D>& context) { return levels(context.level); },
+               observer, LevelObserver(), threaded, interrupter);
+}
+
+template <int D>
+MultiscaleResult<D>
+MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
+                         const solver::IterationObserver& observer,
+                         const LevelObserver& levelObserver, bool threaded,
+                         openvdb::util::NullInterrupter* interrupter) const
+{
     MultiscaleResult<D> result;
     if (interrupter) interrupter->start("vdbmatch: multiscale descent");
     for (int l = mOpts.minLevel; l <= mOpts.maxLevel; ++l) {
@@ -63,7 +74,11 @@ MultiscaleDriver<D>::run(const LevelBuilder<D>& levels, const solver::IterationO
             result.reports.push_back(stopped);
             break;
         }
-        const Level<D> in = levels(l);
+        LevelContext<D> context;
+        context.level = l;
+        context.previousLattice = result.lattice.get();
+        context.previousDisplacement = result.lattice ? &result.displacement : nullptr;
+        const Level<D> in = levels(context);
         if (!in.lattice || !in.shape1 || !in.shape2)
             OPENVDB_THROW(openvdb::ValueError,
                           "MultiscaleDriver::run: level " << l << " lacks a lattice or a shape");
@@ -87,6 +102,7 @@ MultiscaleDriver<D>::run(const LevelBuilder<D>& levels, const solver::IterationO
         result.lattice = in.lattice;
         result.displacement = std::move(u);
         result.reports.push_back(report);
+        if (levelObserver) levelObserver(report);
         if (report.status == solver::Status::Interrupted) break;
     }
     if (interrupter) interrupter->end();

@@ -45,6 +45,23 @@ template <int D> struct Level
 /// thread). Signature: Level<D>(int level).
 template <int D> using LevelBuilder = std::function<Level<D>(int)>;
 
+/// What a level builder may use to shape level l: the result of level l-1 (null at the first
+/// level), e.g. to refine the lattice near phi^{-1}(M2).
+template <int D> struct LevelContext
+{
+    int level = 0;
+    const SimplexLattice<D>* previousLattice = nullptr;
+    const NodeVectors<D>* previousDisplacement = nullptr; ///< on previousLattice, Omega units
+};
+
+/// Builds the inputs of a level from its context (called once per level, in increasing order,
+/// on the calling thread). Signature: Level<D>(const LevelContext<D>& context).
+template <int D> using ContextLevelBuilder = std::function<Level<D>(const LevelContext<D>&)>;
+
+/// Called when a level ends (on the calling thread), with its report.
+/// Signature: void(const solver::Report& report).
+using LevelObserver = std::function<void(const solver::Report&)>;
+
 struct MultiscaleOptions
 {
     int minLevel = 4; ///< lmin (tab:parameters: 4)
@@ -95,6 +112,13 @@ public:
     ///        Energy / Descent (e.g. fields that do not cover the unit box).
     MultiscaleResult<D> run(const LevelBuilder<D>& levels,
                             const solver::IterationObserver& observer = {}, bool threaded = true,
+                            openvdb::util::NullInterrupter* interrupter = nullptr) const;
+
+    /// As above, with a builder that sees the previous level's result, and a callback at the
+    /// end of each level.
+    MultiscaleResult<D> run(const ContextLevelBuilder<D>& levels,
+                            const solver::IterationObserver& observer,
+                            const LevelObserver& levelObserver, bool threaded = true,
                             openvdb::util::NullInterrupter* interrupter = nullptr) const;
 
 private:

@@ -1,0 +1,214 @@
+/// @file TestMatch.cc
+/// @brief Acceptance of match(): shapes given in world space (meshes and polylines with their own
+///        placement), adaptive lattices, the whole multiscale descent. After matching, the mean
+///        |d2(phi(v))| over M1's vertices is below h_finest / 2, det D phi > 0 on every simplex,
+///        and the symmetric energy of the result is lower than at the identity.
+#include <vdbmatch/Match.h>
+#include <vdbmatch/energy/Energy.h>
+#include <vdbmatch/io/DeformationIO.h>
+#include <vdbmatch/multiscale/Prolongation.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+using namespace vdbmatch;
+
+namespace {
+
+/// A closed polygon with n vertices on the ellipse centre + (a cos t, b sin t), counter-clockwise.
+Surface<2>
+ellipseCurve(const Vec<2>& centre, Real a, Real b, int n)
+{
+    Surface<2> s;
+    for (int i = 0; i < n; ++i) {
+        const Real t = 2 * M_PI * i / n;
+        s.points.push_back(centre + Vec<2>(a * std::cos(t), b * std::sin(t)));
+        s.elements.push_back({int32_t(i), int32_t((i + 1) % n)});
+    }
+    return s;
+}
+
+/// A closed triangulated ellipsoid: a UV sphere (poles + rings) scaled by the semi-axes.
+Surface<3>
+ellipsoidMesh(const Vec<3>& centre, const Vec<3>& axes, int rings, int segments)
+{
+    Surface<3> s;
+    s.points.push_back(centre + Vec<3>(0, 0, axes[2]));
+    for (int r = 1; r < rings; ++r) {
+        const Real th = M_PI * r / rings;
+        for (int k = 0; k < segments; ++k) {
+            const Real ph = 2 * M_PI * k / segments;
+            s.points.push_back(centre + Vec<3>(axes[0] * std::sin(th) * std::cos(ph),
+                                               axes[1] * std::sin(th) * std::sin(ph),
+                                               axes[2] * std::cos(th)));
+        }
+    }
+    s.points.push_back(centre - Vec<3>(0, 0, axes[2]));
+    const int32_t south = int32_t(s.points.size() - 1);
+    auto ring = [&](int r, int k) { return int32_t(1 + (r - 1) * segments + (k % segments)); };
+    for (int k = 0; k < segments; ++k)
+        s.elements.push_back({0, ring(1, k), ring(1, k + 1)});
+    for (int r = 1; r + 1 < rings; ++r) {
+        for (int k = 0; k < segments; ++k) {
+            s.elements.push_back({ring(r, k), ring(r + 1, k), ring(r + 1, k + 1)});
+            s.elements.push_back({ring(r, k), ring(r + 1, k + 1), ring(r, k + 1)});
+        }
+    }
+    for (int k = 0; k < segments; ++k) {
+        s.elements.push_back({south, ring(rings - 1, k + 1), ring(rings - 1, k)});
+    }
+    return s;
+}
+
+template <int D>
+void
+checkMatch(const Surface<D>& source, const Surface<D>& target, const MatchOptions& opts)
+{
+    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
+    int iterations = 0;
+    MatchObserver observer;
+    observer.iteration = [&](const solver::IterationInfo& info) {
+        EXPECT_TRUE(std::isfinite(info.energy));
+        ++iterations;
+    };
+    observer.levelEnd = [](const LevelSummary& l) {
+        std::printf("[ level %d ] %zu cells, %zu unknowns (%.1f%% of %zu dense nodes), %zu "
+                    "hanging; %s after %d iterations, E %.6e, min det %.3f; fields %.2f s, "
+                    "lattice %.2f s, descent %.2f s\n",
+                    l.level, l.lattice.cells, l.lattice.unknowns,
+                    100.0 * double(l.lattice.nodes) / double(l.lattice.denseNodes),
+                    l.lattice.denseNodes, l.lattice.hangingNodes, solver::toString(l.report.status),
+                    l.report.iterations, l.report.energy, l.report.minJacobian, l.fieldSeconds,
+                    l.latticeSeconds, l.report.elapsedSeconds);
+    };
+    const MatchResult<D> result = match<D>(source, target, placement, opts, observer);
+    ASSERT_TRUE(result.isComplete());
+    ASSERT_EQ(result.levels.size(),
+              std::size_t(opts.multiscale.maxLevel - opts.multiscale.minLevel + 1));
+    EXPECT_GT(iterations, 0);
+    for (const LevelSummary& l : result.levels) {
+        EXPECT_GT(l.report.minJacobian, 0.0) << "level " << l.level;
+        EXPECT_LE(l.report.energy, l.report.initialEnergy) << "level " << l.level;
+        EXPECT_LT(l.lattice.nodes, l.lattice.denseNodes + 1);
+    }
+    const SimplexLattice<D>& finest = *result.lattice;
+    EXPECT_EQ(finest.level(), opts.multiscale.maxLevel);
+    EXPECT_GT(result.minJacobian, 0.0);
+
+    // Residual over M1's vertices, Omega units, against h_finest / 2.
+    std::printf("[ residual ] mean %.3e, max %.3e (unit box); h/2 = %.3e; %zu samples\n",
+                result.residual.meanUnit, result.residual.maxUnit, finest.h() / 2,
+                result.residual.samples);
+    EXPECT_EQ(result.residual.samples, source.points.size());
+    EXPECT_LT(result.residual.meanUnit, finest.h() / 2);
+    EXPECT_NEAR(result.residual.meanWorld, placement.toWorldLength(result.residual.meanUnit),
+                1e-12);
+
+    // The symmetric energy of the result is below its value at the identity (same lattice
+    // and fields as the last level).
+    MatchOptions o = opts;
+    o.sampler.fields.tau = opts.multiscale.energy.tau;
+    Surface<D> unit1 = source, unit2 = target;
+    for (auto* s : {&unit1, &unit2}) {
+        for (Vec<D>& p : s->points) {
+            openvdb::Vec3d w(0.0);
+            for (int a = 0; a < D; ++a)
+                w[a] = p[a];
+            const openvdb::Vec3d u = placement.toUnit(w);
+            for (int a = 0; a < D; ++a)
+                p[a] = u[a];
+        }
+    }
+    const auto shape1 = buildShapeSampler<D>(unit1, finest.level(), o.sampler);
+    const auto shape2 = buildShapeSampler<D>(unit2, finest.level(), o.sampler);
+    const Energy<D> energy(finest, *shape1, *shape2, opts.multiscale.energy, EnergyKind::Symmetric);
+    const Real atIdentity = energy.value(NodeVectors<D>::Zero(D, finest.nodeCount()));
+    const Real atResult = energy.value(result.displacement);
+    std::printf("[ energy ] identity %.6e, result %.6e; %.2f s\n", atIdentity, atResult,
+                result.totalSeconds);
+    EXPECT_LT(atResult, atIdentity);
+    EXPECT_GT(energy.minJacobianDeterminant(result.displacement), 0.0);
+
+    // The deformed source is phi applied to the source vertices, in world space.
+    ASSERT_EQ(result.deformedSource.points.size(), source.points.size());
+    const multiscale::PiecewiseLinearInterpolator<D> phi(finest);
+    for (std::size_t i = 0; i < source.points.size(); i += 97) {
+        Vec<D> du;
+        ASSERT_TRUE(phi.evaluate(result.displacement, unit1.points[i], du));
+        const Vec<D> moved = source.points[i] + du / placement.scale;
+        EXPECT_LT((moved - result.deformedSource.points[i]).norm(), 1e-9);
+    }
+
+    // The interchange grid reproduces phi at its nodes (world units).
+    const openvdb::Vec3SGrid::Ptr grid =
+        makeDeformationGrid<D>(finest, result.displacement, placement);
+    EXPECT_EQ(grid->getName(), DEFORMATION_GRID_NAME);
+    EXPECT_EQ(grid->getVectorType(), openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    const openvdb::Index64 n1 = openvdb::Index64((1 << finest.level()) + 1);
+    EXPECT_EQ(grid->activeVoxelCount(), D == 3 ? n1 * n1 * n1 : n1 * n1);
+    auto acc = grid->getConstAccessor();
+    for (std::size_t i = 0; i < finest.nodeCount(); i += 31) {
+        const openvdb::Vec3s v = acc.getValue(finest.nodeCoord(i));
+        for (int a = 0; a < D; ++a) {
+            EXPECT_NEAR(v[a], result.displacement(a, Eigen::Index(i)) / placement.scale,
+                        1e-6 / placement.scale);
+        }
+        // Node i of the grid sits at the node's world position.
+        const openvdb::Vec3d world = grid->indexToWorld(finest.nodeCoord(i));
+        Vec<D> unit = finest.nodePosition(i);
+        openvdb::Vec3d expected(0.0);
+        for (int a = 0; a < D; ++a)
+            expected[a] = unit[a];
+        if (D == 2) expected[2] = 0.5;
+        const openvdb::Vec3d expectedWorld = placement.toWorld(expected);
+        EXPECT_LT((world - expectedWorld).length(), 1e-9 / placement.scale);
+    }
+}
+
+} // namespace
+
+TEST(Match, CircleToEllipse2D)
+{
+    // World units on purpose: the placement maps them into the unit box.
+    const Surface<2> circle = ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
+    const Surface<2> ellipse = ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 7;
+    checkMatch<2>(circle, ellipse, opts);
+}
+
+TEST(Match, SphereToEllipsoid3D)
+{
+    const Surface<3> sphere = ellipsoidMesh(Vec<3>(0, 0, 0), Vec<3>(1, 1, 1), 40, 80);
+    const Surface<3> ellipsoid =
+        ellipsoidMesh(Vec<3>(0.25, 0.1, -0.1), Vec<3>(1.3, 0.95, 0.8), 40, 80);
+    MatchOptions opts = MatchOptions::defaults(3);
+    opts.multiscale.minLevel = 3;
+    opts.multiscale.maxLevel = 5;
+    opts.multiscale.descent.energyTolerance = 1e-4;
+    checkMatch<3>(sphere, ellipsoid, opts);
+}
+
+TEST(Match, RejectsShapesOutsideTheBox)
+{
+    const Surface<2> a = ellipseCurve(Vec<2>(0, 0), 1, 1, 64);
+    const Surface<2> b = ellipseCurve(Vec<2>(50, 0), 1, 1, 64);
+    // A placement computed for a alone: b maps outside the unit box.
+    const UnitBoxPlacement placement = placeInUnitBox(a, a, 0.2);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.maxLevel = 5;
+    EXPECT_THROW(match<2>(a, b, placement, opts), openvdb::ValueError);
+}
+
+TEST(Match, InvalidOptionsThrow)
+{
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.margin = 0.6;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts = MatchOptions::defaults(2);
+    opts.refinementMarginCells = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}

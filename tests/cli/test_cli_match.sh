@@ -1,0 +1,179 @@
+#!/usr/bin/env bash
+# CLI tests of `vdb_match [match] SOURCE TARGET -o OUTDIR`: usage and input errors with their
+# exit codes, end-to-end runs at coarse levels (3D level sets, 2D polylines) whose outputs are
+# read back with vdb_print and pyopenvdb, and Ctrl-C writing partial outputs marked interrupted.
+# Usage: test_cli_match.sh VDB_MATCH ASSETS_DIR
+set -uo pipefail
+
+VDB_MATCH=${1:?usage: test_cli_match.sh VDB_MATCH ASSETS_DIR}
+ASSETS=${2:?usage: test_cli_match.sh VDB_MATCH ASSETS_DIR}
+SPHERE="$ASSETS/sphere.vdb"
+ELLIPSOID="$ASSETS/ellipsoid.vdb"
+FIGURE_A="$ASSETS/figure_a.polyline"
+FIGURE_B="$ASSETS/figure_b.polyline"
+SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli-match.XXXXXX")
+trap 'rm -rf "$SCRATCH"' EXIT
+
+failures=0
+count=0
+fail() {
+    failures=$((failures + 1))
+    echo "FAIL $1"
+}
+
+# check NAME EXPECTED_CODE STDOUT_PATTERN STDERR_PATTERN -- ARGS...  (as in test_cli.sh)
+check() {
+    local name=$1 expected=$2 outPattern=$3 errPattern=$4
+    shift 5
+    count=$((count + 1))
+    "$VDB_MATCH" "$@" >"$SCRATCH/out" 2>"$SCRATCH/err"
+    local code=$?
+    local problem=""
+    if [ "$code" -ne "$expected" ]; then
+        problem="exit code $code, expected $expected"
+    elif [ -n "$outPattern" ] && ! grep -Eq -- "$outPattern" "$SCRATCH/out"; then
+        problem="stdout does not match /$outPattern/"
+    elif [ -n "$errPattern" ] && ! grep -Eq -- "$errPattern" "$SCRATCH/err"; then
+        problem="stderr does not match /$errPattern/"
+    elif [ "$expected" -ne 0 ] && [ "$expected" -ne 5 ]; then
+        if [ "$(wc -l <"$SCRATCH/err")" -ne 1 ] || ! grep -q '^vdb_match: error: ' "$SCRATCH/err"; then
+            problem="stderr is not one 'vdb_match: error: ' line"
+        fi
+    fi
+    if [ -n "$problem" ]; then
+        fail "$name: $problem"
+        echo "  command: vdb_match $*"
+        sed 's/^/  stdout: /' "$SCRATCH/out" | head -20
+        sed 's/^/  stderr: /' "$SCRATCH/err" | tail -20
+    else
+        echo "ok   $name"
+    fi
+}
+
+PYTHON=""
+for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
+    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
+        PYTHON=$candidate
+        break
+    fi
+done
+[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"; exit 1; }
+
+# Invalid inputs.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$SCRATCH/open.obj"
+printf '0 0\n1 0\nnan 1\n' >"$SCRATCH/nan.polyline"
+printf 'solid x\nendsolid x\n' >"$SCRATCH/empty.stl"
+printf 'hello\n' >"$SCRATCH/shape.xyz"
+touch "$SCRATCH/afile"
+
+# ---------------------------------------------------------------- usage (1)
+check help 0 'SOURCE TARGET -o OUTDIR' '' -- --help
+check missing-output 1 '' 'missing the output directory' -- "$SPHERE" "$ELLIPSOID"
+check one-input 1 '' 'expected SOURCE TARGET' -- "$SPHERE" -o "$SCRATCH/o"
+check levels-order 1 '' 'finer than the last' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 6..4
+check levels-syntax 1 '' '--levels expects A..B' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 6
+check grid-mesh 1 '' '--grid applies to .vdb inputs' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --grid surface
+check bad-energy 1 '' '--energy expects' -- match "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --energy x
+
+# ---------------------------------------------------------------- I/O (2)
+check missing-file 2 '' 'does not exist' -- "$SCRATCH/nothere.vdb" "$ELLIPSOID" -o "$SCRATCH/o" --quiet
+check outdir-is-file 2 '' 'output directory' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/afile" --levels 3..3 --quiet
+
+# ---------------------------------------------------------------- invalid input (3)
+check open-mesh 3 '' 'open' -- "$SCRATCH/open.obj" "$SPHERE" -o "$SCRATCH/o" --quiet
+check nan-polyline 3 '' '' -- "$SCRATCH/nan.polyline" "$FIGURE_B" -o "$SCRATCH/o" --quiet
+check empty-stl 3 '' '' -- "$SCRATCH/empty.stl" "$SPHERE" -o "$SCRATCH/o" --quiet
+check unknown-type 3 '' 'unknown file type' -- "$SCRATCH/shape.xyz" "$SPHERE" -o "$SCRATCH/o" --quiet
+check dimension-mismatch 3 '' '2D shape but' -- "$FIGURE_A" "$SPHERE" -o "$SCRATCH/o" --quiet
+check margin-range 3 '' 'margin' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --margin 0.7 --quiet
+check parameter-range 3 '' 'c_mem' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --c-mem -1 --quiet
+[ -e "$SCRATCH/o/deformation.vdb" ] && fail "an input error left outputs in $SCRATCH/o"
+
+# ---------------------------------------------------------------- 3D end to end (0)
+check match-3d 0 'converged|not converged' 'level 5 done' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3" --levels 3..5
+count=$((count + 1))
+if command -v vdb_print >/dev/null 2>&1; then
+    if vdb_print -l "$SCRATCH/m3/deformation.vdb" | grep -q 'displacement' &&
+        vdb_print -l "$SCRATCH/m3/deformed.vdb" | grep -q 'surface'; then
+        echo "ok   vdb_print"
+    else
+        fail "vdb_print: cannot list the outputs"
+    fi
+else
+    echo "ok   vdb_print (skipped: not installed)"
+fi
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/m3" 3 <<'PY'; then echo "ok   readback-3d"; else fail "readback-3d"; fi
+import json, math, sys
+import pyopenvdb as vdb
+out, dim = sys.argv[1], int(sys.argv[2])
+g = vdb.read(out + "/deformation.vdb", "displacement")
+assert g.valueTypeName == "vec3s", g.valueTypeName
+assert g.vectorType == vdb.VectorType.CONTRAVARIANT_RELATIVE if hasattr(vdb, "VectorType") else True
+meta = g.metadata
+for key in ("vdbmatch_version", "vdbmatch_command", "vdbmatch_energy", "vdbmatch_energy_total",
+            "vdbmatch_residual_mean", "is_interrupted"):
+    assert key in meta, key
+assert meta["is_interrupted"] is False
+n = 0
+for item in g.citerOnValues():
+    v = item.value
+    assert all(math.isfinite(c) for c in v), v
+    n += 1
+assert n > 0
+s = vdb.read(out + "/deformed.vdb", "surface")
+assert s.gridClass == vdb.GridClass.LEVEL_SET, s.gridClass
+r = json.load(open(out + "/report.json"))
+assert r["dimension"] == dim and r["status"] in ("converged", "not converged")
+last = r["levels"][-1]
+assert r["result"]["residual"]["meanUnit"] < last["h"] / 2, (r["result"]["residual"], last["h"])
+assert r["result"]["minJacobian"] > 0
+assert last["unknowns"] > 0 and last["nodes"] <= last["denseNodes"]
+assert len(r["levels"]) == r["parameters"]["maxLevel"] - r["parameters"]["minLevel"] + 1
+obj = open(out + "/deformed.obj").read()
+assert obj.count("\nv ") > 100
+PY
+ls "$SCRATCH/m3" | grep -q tmp && fail "temporary files left in the output directory"
+
+# ---------------------------------------------------------------- 2D end to end (0)
+if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then
+    check match-2d 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2" --levels 4..6 --quiet
+    count=$((count + 1))
+    if "$PYTHON" - "$SCRATCH/m2" 2 <<'PY'; then echo "ok   readback-2d"; else fail "readback-2d"; fi
+import json, sys
+import pyopenvdb as vdb
+out = sys.argv[1]
+g = vdb.read(out + "/deformation.vdb", "displacement")
+lo, hi = g.evalActiveVoxelBoundingBox()
+assert lo[2] == hi[2] == 0, (lo, hi)
+r = json.load(open(out + "/report.json"))
+assert r["dimension"] == 2
+assert r["result"]["residual"]["meanUnit"] < r["levels"][-1]["h"] / 2
+PY
+fi
+
+# ---------------------------------------------------------------- interrupted (5)
+count=$((count + 1))
+"$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/int" --levels 4..8 --progress-every 1 >"$SCRATCH/out" 2>"$SCRATCH/err" &
+pid=$!
+for _ in $(seq 1 600); do
+    grep -q 'level 5 it' "$SCRATCH/err" && break
+    sleep 0.1
+done
+kill -INT "$pid" 2>/dev/null
+wait "$pid"
+code=$?
+if [ "$code" -eq 5 ] && "$PYTHON" -c '
+import json, sys, pyopenvdb as vdb
+d = sys.argv[1]
+assert vdb.read(d + "/deformation.vdb", "displacement").metadata["is_interrupted"] is True
+assert json.load(open(d + "/report.json"))["status"] == "interrupted"
+' "$SCRATCH/int"; then
+    echo "ok   interrupted"
+else
+    fail "interrupted: exit code $code, expected 5 and outputs marked interrupted"
+    tail -5 "$SCRATCH/err"
+fi
+
+echo "$((count - failures))/$count passed"
+[ "$failures" -eq 0 ]

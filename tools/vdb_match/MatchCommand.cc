@@ -1,0 +1,640 @@
+/// @file MatchCommand.cc
+/// @brief `vdb_match [match] SOURCE TARGET -o OUTDIR`: read two shapes, run match() with progress
+///        on stderr, write deformation.vdb, deformed.vdb, deformed.obj and report.json
+///        (docs/cli.md).
+#include "Cli.h"
+#include "CliSupport.h"
+
+#include <vdbmatch/Match.h>
+#include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/Surface.h>
+#include <vdbmatch/geometry/SurfaceExtraction.h>
+#include <vdbmatch/io/AtomicFile.h>
+#include <vdbmatch/io/DeformationIO.h>
+#include <vdbmatch/io/LevelSetIO.h>
+#include <vdbmatch/io/MeshIO.h>
+#include <vdbmatch/io/ShapeIO.h>
+
+#include <openvdb/openvdb.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace vdbmatch {
+namespace cli {
+
+namespace {
+
+/// Options of `match`. Energy parameters and levels left unset take the defaults of the
+/// inputs' dimension (tab:parameters).
+struct MatchCliOptions
+{
+    std::string source, target, outDir;
+    std::string grid, sourceGrid, targetGrid;
+    std::optional<int> minLevel, maxLevel;
+    std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
+    double tau = EnergyParameters().tau;
+    EnergyKind kind = EnergyKind::Symmetric;
+    double margin = DEFAULT_UNIT_BOX_MARGIN;
+    int hessianSmoothing = 0;
+    double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
+    int maxIterations = solver::DescentOptions().maxIterations;
+    double energyTolerance = solver::DescentOptions().energyTolerance;
+    double gradientTolerance = solver::DescentOptions().relativeGradientTolerance;
+    double metricTau = solver::DEFAULT_METRIC_TAU_FACTOR;
+    int deformationLevel = 0;
+    int progressEvery = 10;
+    int threads = 0;
+    bool quiet = false;
+    bool strict = false;
+    std::string commandLine;
+};
+
+std::vector<Option<MatchCliOptions>>
+matchOptionTable()
+{
+    const EnergyParameters p3 = EnergyParameters::defaults(3), p2 = EnergyParameters::defaults(2);
+    const MatchCliOptions d;
+    auto both = [](double a3, double a2) {
+        return formatNumber(a3) + " in 3D, " + formatNumber(a2) + " in 2D";
+    };
+    using O = MatchCliOptions;
+    // clang-format off
+    return {
+        {"--output", "OUTDIR", "Input and output",
+         "output directory, created if missing; existing outputs are replaced (required; also -o)",
+         [](O& o, const std::string& v) { o.outDir = v; }},
+        {"--grid", "NAME", "Input and output",
+         "grid to read from .vdb inputs (default: the only float grid of each file)",
+         [](O& o, const std::string& v) { o.grid = v; }},
+        {"--source-grid", "NAME", "Input and output", "grid to read from SOURCE (not with --grid)",
+         [](O& o, const std::string& v) { o.sourceGrid = v; }},
+        {"--target-grid", "NAME", "Input and output", "grid to read from TARGET (not with --grid)",
+         [](O& o, const std::string& v) { o.targetGrid = v; }},
+        {"--deformation-level", "L", "Input and output",
+         "node spacing 2^-L of deformation.vdb in the unit box (default: the finest level, "
+         "which reproduces phi exactly)",
+         [](O& o, const std::string& v) { o.deformationLevel = parseInt("--deformation-level", v); }},
+        {"--min-level", "L", "Levels and domain",
+         "first (coarsest) level, h = 2^-L (default 4)",
+         [](O& o, const std::string& v) { o.minLevel = parseInt("--min-level", v); }},
+        {"--max-level", "L", "Levels and domain",
+         "last (finest) level (default 8 in 3D, 9 in 2D)",
+         [](O& o, const std::string& v) { o.maxLevel = parseInt("--max-level", v); }},
+        {"--levels", "A..B", "Levels and domain", "both at once, e.g. 4..7",
+         [](O& o, const std::string& v) {
+             const size_t dots = v.find("..");
+             if (dots == std::string::npos) throw UsageError("--levels expects A..B, got '" + v + "'");
+             o.minLevel = parseInt("--levels", v.substr(0, dots));
+             o.maxLevel = parseInt("--levels", v.substr(dots + 2));
+         }},
+        {"--margin", "X", "Levels and domain",
+         "space left on each side of the shapes' common bounding box in the unit box, [0, 0.5) "
+         "(default " + formatNumber(d.margin) + ")",
+         [](O& o, const std::string& v) { o.margin = parseDouble("--margin", v); }},
+        {"--refine-margin", "CELLS", "Levels and domain",
+         "extra width of the finest cells around the bands, in cells (default " +
+             formatNumber(d.refinementMargin) + ")",
+         [](O& o, const std::string& v) { o.refinementMargin = parseDouble("--refine-margin", v); }},
+        {"--energy", "KIND", "Energy (paper tab:parameters)",
+         "symmetric (eq:Esym) or directional (eq:Ecomparison) (default symmetric)",
+         [](O& o, const std::string& v) {
+             if (v != "symmetric" && v != "directional") {
+                 throw UsageError("--energy expects 'symmetric' or 'directional', got '" + v + "'");
+             }
+             o.kind = parseEnergyKind(v);
+         }},
+        {"--c-match", "X", "Energy (paper tab:parameters)",
+         "weight of the matching term (default " + both(p3.cMatch, p2.cMatch) + ")",
+         [](O& o, const std::string& v) { o.cMatch = parseDouble("--c-match", v); }},
+        {"--c-mem", "X", "Energy (paper tab:parameters)",
+         "weight of the membrane term (default " + both(p3.cMem, p2.cMem) + ")",
+         [](O& o, const std::string& v) { o.cMem = parseDouble("--c-mem", v); }},
+        {"--c-bend", "X", "Energy (paper tab:parameters)",
+         "weight of the bending term (default " + both(p3.cBend, p2.cBend) + ")",
+         [](O& o, const std::string& v) { o.cBend = parseDouble("--c-bend", v); }},
+        {"--c-vol", "X", "Energy (paper tab:parameters)",
+         "weight of the volume term, times sigma^theta (default " + both(p3.cVol, p2.cVol) + ")",
+         [](O& o, const std::string& v) { o.cVol = parseDouble("--c-vol", v); }},
+        {"--q", "X", "Energy (paper tab:parameters)",
+         "matching exponent, weight sigma^-q (default " + both(p3.q, p2.q) + ")",
+         [](O& o, const std::string& v) { o.q = parseDouble("--q", v); }},
+        {"--theta", "X", "Energy (paper tab:parameters)",
+         "volume exponent, weight sigma^theta (default " + both(p3.theta, p2.theta) + ")",
+         [](O& o, const std::string& v) { o.theta = parseDouble("--theta", v); }},
+        {"--tau", "X", "Energy (paper tab:parameters)",
+         "eigenvalue floor of the regularized shape operator, 1/unit-box length, > 0 (default " +
+             formatNumber(d.tau) + ")",
+         [](O& o, const std::string& v) { o.tau = parseDouble("--tau", v); }},
+        {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
+         "[1,2,1]/4 smoothing passes of the distance Hessian, >= 0 (default 0)",
+         [](O& o, const std::string& v) { o.hessianSmoothing = parseInt("--hessian-smoothing", v); }},
+        {"--max-iterations", "N", "Descent",
+         "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
+         [](O& o, const std::string& v) { o.maxIterations = parseInt("--max-iterations", v); }},
+        {"--energy-tolerance", "X", "Descent",
+         "a level has converged when the energy fell by less than X (relative) over 5 "
+         "iterations (default " + formatNumber(d.energyTolerance) + ")",
+         [](O& o, const std::string& v) { o.energyTolerance = parseDouble("--energy-tolerance", v); }},
+        {"--gradient-tolerance", "X", "Descent",
+         "... or when the H1 gradient norm fell below X times its initial value (default " +
+             formatNumber(d.gradientTolerance) + ")",
+         [](O& o, const std::string& v) {
+             o.gradientTolerance = parseDouble("--gradient-tolerance", v);
+         }},
+        {"--metric-tau", "X", "Descent",
+         "weight of the H1 metric M + tau L as a factor of sigma^2 (default " +
+             formatNumber(d.metricTau) + ")",
+         [](O& o, const std::string& v) { o.metricTau = parseDouble("--metric-tau", v); }},
+        {"--strict", nullptr, "Descent",
+         "exit with code 4 if the finest level did not converge (outputs are still written)",
+         [](O& o, const std::string&) { o.strict = true; }},
+        {"--quiet", nullptr, "Execution", "no progress on stderr (errors are still printed)",
+         [](O& o, const std::string&) { o.quiet = true; }},
+        {"--progress-every", "N", "Execution",
+         "print a progress line every N iterations (default " +
+             std::to_string(d.progressEvery) + ")",
+         [](O& o, const std::string& v) { o.progressEvery = parseInt("--progress-every", v); }},
+        {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
+         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+    };
+    // clang-format on
+}
+
+MatchCliOptions
+parseMatchOptions(int argc, const char* const* argv, int first)
+{
+    // -o is the only short option: rewrite it to --output.
+    std::vector<std::string> args;
+    for (int i = 0; i < argc; ++i) {
+        const std::string a = argv[i];
+        args.push_back(i >= first && a == "-o" ? "--output" : a);
+    }
+    std::vector<const char*> rewritten;
+    for (const std::string& a : args)
+        rewritten.push_back(a.c_str());
+
+    MatchCliOptions o;
+    for (int i = 0; i < argc; ++i) {
+        if (i) o.commandLine += ' ';
+        o.commandLine += argv[i];
+    }
+    const std::vector<std::string> positional =
+        parseOptions(matchOptionTable(), argc, rewritten.data(), first, o);
+    if (positional.size() != 2) {
+        throw UsageError("expected SOURCE TARGET, got " + std::to_string(positional.size()) +
+                         " file argument(s) (see vdb_match --help)");
+    }
+    o.source = positional[0];
+    o.target = positional[1];
+    if (o.outDir.empty()) throw UsageError("missing the output directory: -o OUTDIR");
+    if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
+        throw UsageError("--grid cannot be combined with --source-grid or --target-grid");
+    }
+    if (o.minLevel && o.maxLevel && *o.minLevel > *o.maxLevel) {
+        throw UsageError("the first level (" + std::to_string(*o.minLevel) +
+                         ") is finer than the last (" + std::to_string(*o.maxLevel) + ")");
+    }
+    if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
+    if (o.threads < 0) throw UsageError("--threads must be >= 0");
+    if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
+    if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
+    return o;
+}
+
+////////////////////////////////////////////////////////////////////////////////
+// Inputs
+
+/// Reads one input; --grid for a non-.vdb file is a usage error.
+Shape
+readInput(const std::string& path, const std::string& gridName)
+{
+    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
+        throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
+    }
+    return readShape(path, gridName);
+}
+
+////////////////////////////////////////////////////////////////////////////////
+// Progress
+
+std::string
+duration(double seconds)
+{
+    if (!std::isfinite(seconds) || seconds < 0) return "?";
+    if (seconds < 60) return fixed("%.1fs", seconds);
+    const int s = int(std::lround(seconds));
+    if (s < 3600) return std::to_string(s / 60) + "m" + fixed("%02.0fs", double(s % 60));
+    return std::to_string(s / 3600) + "h" + fixed("%02.0fm", double((s % 3600) / 60));
+}
+
+std::string
+termsText(const EnergyTerms& t)
+{
+    return "match " + fixed("%.3e", t.match[0] + t.match[1]) + " mem " +
+           fixed("%.3e", t.mem[0] + t.mem[1]) + " bend " + fixed("%.3e", t.bend[0] + t.bend[1]) +
+           " vol " + fixed("%.3e", t.vol[0] + t.vol[1]);
+}
+
+/// Progress on stderr with an estimate of the time left: a level is assumed to cost the time
+/// of the previous one times the ratio of their unknowns, and each later level 2^(d-1) times
+/// the one before (the fine cells follow the surfaces).
+class ProgressPrinter
+{
+public:
+    ProgressPrinter(std::ostream& err, const MatchCliOptions& o, int dim, int minLevel,
+                    int maxLevel)
+        : mErr(err), mO(o), mDim(dim), mMaxLevel(maxLevel)
+    {
+        (void)minLevel;
+    }
+
+    void message(const std::string& text)
+    {
+        if (!mO.quiet) mErr << PROGRAM << ": " << text << std::endl;
+    }
+
+    void levelStart(int level, const LatticeSummary& s, double fieldSeconds, double latticeSeconds)
+    {
+        if (mLastLevelSeconds > 0 && mLastUnknowns > 0) {
+            mLevelEstimate = mLastLevelSeconds * double(s.unknowns) / double(mLastUnknowns);
+        } else {
+            mLevelEstimate = -1;
+        }
+        mLastUnknowns = s.unknowns;
+        mLevelStart = Clock::now();
+        mLevelPrep = fieldSeconds + latticeSeconds;
+        const double fraction = s.denseNodes ? double(s.nodes) / double(s.denseNodes) : 1.0;
+        message("level " + std::to_string(level) + ": h = 2^-" + std::to_string(level) + ", " +
+                std::to_string(s.cells) + " cells, " + std::to_string(s.unknowns) + " unknowns (" +
+                std::to_string(s.nodes) + " nodes = " + fixed("%.1f", 100.0 * fraction) +
+                "% of the " + std::to_string(s.denseNodes) + " dense nodes, " +
+                std::to_string(s.hangingNodes) + " hanging); fields " +
+                fixed("%.2fs", fieldSeconds) + ", lattice " + fixed("%.2fs", latticeSeconds));
+    }
+
+    void iteration(const solver::IterationInfo& i)
+    {
+        if (mO.quiet || i.iteration % mO.progressEvery != 0) return;
+        mErr << PROGRAM << ": level " << i.level << " it " << fixed("%4.0f", i.iteration) << "  E "
+             << fixed("%.6e", i.energy) << " (" << termsText(i.terms) << ")  |g| "
+             << fixed("%.2e", i.gradNorm) << "  step " << fixed("%.2e", i.step) << "  "
+             << duration(secondsSince(mStart)) << timeLeft(i.level) << std::endl;
+    }
+
+    void levelEnd(const LevelSummary& s)
+    {
+        mLastLevelSeconds = s.report.elapsedSeconds + mLevelPrep;
+        const solver::Report& r = s.report;
+        std::string how = solver::toString(r.status);
+        if (r.status == solver::Status::Converged) {
+            how += std::string(" (") + solver::toString(r.convergedBy) + ")";
+        }
+        message("level " + std::to_string(s.level) + " done: " + how + " after " +
+                std::to_string(r.iterations) + " iterations, E " + fixed("%.6e", r.energy) + " (" +
+                termsText(r.terms) + "), min det " + fixed("%.3g", r.minJacobian) + ", " +
+                fixed("%.1fs", r.elapsedSeconds));
+    }
+
+private:
+    std::string timeLeft(int level) const
+    {
+        if (mLevelEstimate <= 0) return "";
+        const double growth = std::pow(2.0, mDim - 1);
+        double left = std::max(0.0, mLevelEstimate - secondsSince(mLevelStart));
+        double next = mLevelEstimate;
+        for (int l = level + 1; l <= mMaxLevel; ++l) {
+            next *= growth;
+            left += next;
+        }
+        return "  left ~" + duration(left);
+    }
+
+    std::ostream& mErr;
+    const MatchCliOptions& mO;
+    int mDim, mMaxLevel;
+    Clock::time_point mStart = Clock::now(), mLevelStart = Clock::now();
+    double mLevelEstimate = -1, mLastLevelSeconds = 0, mLevelPrep = 0;
+    std::size_t mLastUnknowns = 0;
+};
+
+////////////////////////////////////////////////////////////////////////////////
+// Outputs
+
+std::string
+pairJson(const Real* v)
+{
+    return "[" + jsonNumber(v[0]) + ", " + jsonNumber(v[1]) + "]";
+}
+
+std::string
+termsJson(const EnergyTerms& t)
+{
+    return "{\"match\": " + pairJson(t.match) + ", \"mem\": " + pairJson(t.mem) +
+           ", \"bend\": " + pairJson(t.bend) + ", \"vol\": " + pairJson(t.vol) +
+           ", \"total\": " + jsonNumber(t.total()) + "}";
+}
+
+template <int D>
+const Surface<D>&
+surfaceOf(const Shape& in)
+{
+    return in.get<D>();
+}
+
+std::string
+inputJson(const Shape& in, std::size_t vertices, std::size_t elements)
+{
+    return "{\"path\": " + jsonString(in.path) + ", \"format\": " + jsonString(in.format) +
+           ", \"grid\": " + jsonString(in.grid) + ", \"vertices\": " + std::to_string(vertices) +
+           ", \"elements\": " + std::to_string(elements) + "}";
+}
+
+template <int D>
+std::string
+reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
+           const MatchResult<D>& r, const std::string& status, double writeSeconds)
+{
+    const EnergyParameters& p = opts.multiscale.energy;
+    std::ostringstream s;
+    s << "{\n";
+    s << "  \"command\": \"match\",\n";
+    s << "  \"version\": " << jsonString(VDBMATCH_VERSION) << ",\n";
+    s << "  \"commandLine\": " << jsonString(o.commandLine) << ",\n";
+    s << "  \"status\": " << jsonString(status) << ",\n";
+    s << "  \"dimension\": " << D << ",\n";
+    s << "  \"source\": "
+      << inputJson(in[0], surfaceOf<D>(in[0]).points.size(), surfaceOf<D>(in[0]).elements.size())
+      << ",\n";
+    s << "  \"target\": "
+      << inputJson(in[1], surfaceOf<D>(in[1]).points.size(), surfaceOf<D>(in[1]).elements.size())
+      << ",\n";
+    s << "  \"placement\": {\"worldOrigin\": " << jsonVec(r.placement.worldOrigin)
+      << ", \"scale\": " << jsonNumber(r.placement.scale)
+      << ", \"margin\": " << jsonNumber(r.placement.margin) << "},\n";
+    s << "  \"parameters\": {\"energy\": " << jsonString(toString(opts.multiscale.kind))
+      << ", \"cMatch\": " << jsonNumber(p.cMatch) << ", \"cMem\": " << jsonNumber(p.cMem)
+      << ", \"cBend\": " << jsonNumber(p.cBend) << ", \"cVol\": " << jsonNumber(p.cVol)
+      << ", \"q\": " << jsonNumber(p.q) << ", \"theta\": " << jsonNumber(p.theta)
+      << ", \"tau\": " << jsonNumber(p.tau) << ", \"sigmaFactor\": " << jsonNumber(p.sigmaFactor)
+      << ", \"hessianSmoothing\": " << opts.sampler.fields.hessianSmoothing
+      << ", \"minLevel\": " << opts.multiscale.minLevel
+      << ", \"maxLevel\": " << opts.multiscale.maxLevel
+      << ", \"margin\": " << jsonNumber(opts.margin)
+      << ", \"refinementMarginCells\": " << jsonNumber(opts.refinementMarginCells)
+      << ", \"metricTauFactor\": " << jsonNumber(opts.multiscale.metricTauFactor)
+      << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
+      << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
+      << ", \"relativeGradientTolerance\": "
+      << jsonNumber(opts.multiscale.descent.relativeGradientTolerance) << "},\n";
+    s << "  \"levels\": [";
+    for (std::size_t i = 0; i < r.levels.size(); ++i) {
+        const LevelSummary& l = r.levels[i];
+        const solver::Report& rep = l.report;
+        const double h = std::ldexp(1.0, -l.level);
+        s << (i ? ",\n" : "\n") << "    {\"level\": " << l.level << ", \"h\": " << jsonNumber(h)
+          << ", \"sigma\": " << jsonNumber(p.sigmaFactor * h) << ", \"cells\": " << l.lattice.cells
+          << ", \"simplices\": " << l.lattice.simplices << ", \"nodes\": " << l.lattice.nodes
+          << ", \"unknowns\": " << l.lattice.unknowns
+          << ", \"hangingNodes\": " << l.lattice.hangingNodes
+          << ", \"denseNodes\": " << l.lattice.denseNodes << ", \"nodeFractionOfDense\": "
+          << jsonNumber(l.lattice.denseNodes ? double(l.lattice.nodes) / l.lattice.denseNodes : 0)
+          << ", \"cellsPerSize\": [";
+        for (std::size_t k = 0; k < l.lattice.cellsPerLog2Size.size(); ++k) {
+            s << (k ? ", " : "") << l.lattice.cellsPerLog2Size[k];
+        }
+        s << "], \"status\": " << jsonString(solver::toString(rep.status))
+          << ", \"convergedBy\": " << jsonString(solver::toString(rep.convergedBy))
+          << ", \"iterations\": " << rep.iterations
+          << ", \"energyEvaluations\": " << rep.energyEvaluations
+          << ", \"gradientEvaluations\": " << rep.gradientEvaluations
+          << ", \"metricIterations\": " << rep.metricIterations
+          << ", \"restarts\": " << rep.restarts
+          << ", \"initialEnergy\": " << jsonNumber(rep.initialEnergy)
+          << ", \"energy\": " << jsonNumber(rep.energy) << ", \"terms\": " << termsJson(rep.terms)
+          << ", \"gradNorm\": " << jsonNumber(rep.gradNorm)
+          << ", \"minJacobian\": " << jsonNumber(rep.minJacobian)
+          << ", \"seconds\": {\"fields\": " << jsonNumber(l.fieldSeconds)
+          << ", \"lattice\": " << jsonNumber(l.latticeSeconds)
+          << ", \"descent\": " << jsonNumber(rep.elapsedSeconds) << "}}";
+    }
+    s << "\n  ],\n";
+    const solver::Report* last = r.levels.empty() ? nullptr : &r.levels.back().report;
+    s << "  \"result\": {\"energy\": " << jsonNumber(last ? last->energy : INF)
+      << ", \"terms\": " << termsJson(last ? last->terms : EnergyTerms())
+      << ", \"minJacobian\": " << jsonNumber(r.minJacobian)
+      << ", \"residual\": {\"meanWorld\": " << jsonNumber(r.residual.meanWorld)
+      << ", \"maxWorld\": " << jsonNumber(r.residual.maxWorld)
+      << ", \"meanUnit\": " << jsonNumber(r.residual.meanUnit)
+      << ", \"maxUnit\": " << jsonNumber(r.residual.maxUnit)
+      << ", \"samples\": " << r.residual.samples << "}"
+      << ", \"seconds\": {\"match\": " << jsonNumber(r.totalSeconds)
+      << ", \"write\": " << jsonNumber(writeSeconds) << "}},\n";
+    s << "  \"outputs\": [\"deformation.vdb\", \"deformed.vdb\", \"deformed.obj\", "
+         "\"report.json\"]\n";
+    s << "}\n";
+    return s.str();
+}
+
+template <int D>
+int
+runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std::ostream& err)
+{
+    const Clock::time_point start = Clock::now();
+    MatchOptions opts = MatchOptions::defaults(D);
+    EnergyParameters& p = opts.multiscale.energy;
+    if (o.cMatch) p.cMatch = *o.cMatch;
+    if (o.cMem) p.cMem = *o.cMem;
+    if (o.cBend) p.cBend = *o.cBend;
+    if (o.cVol) p.cVol = *o.cVol;
+    if (o.q) p.q = *o.q;
+    if (o.theta) p.theta = *o.theta;
+    p.tau = o.tau;
+    opts.multiscale.kind = o.kind;
+    if (o.minLevel) opts.multiscale.minLevel = *o.minLevel;
+    if (o.maxLevel) opts.multiscale.maxLevel = *o.maxLevel;
+    if (opts.multiscale.minLevel > opts.multiscale.maxLevel) {
+        throw UsageError("the first level (" + std::to_string(opts.multiscale.minLevel) +
+                         ") is finer than the last (" + std::to_string(opts.multiscale.maxLevel) +
+                         ")");
+    }
+    if (opts.multiscale.maxLevel > 12 || opts.multiscale.minLevel < 1) {
+        OPENVDB_THROW(openvdb::ValueError, "levels must be in [1, 12], got "
+                                               << opts.multiscale.minLevel << ".."
+                                               << opts.multiscale.maxLevel);
+    }
+    opts.multiscale.metricTauFactor = o.metricTau;
+    opts.multiscale.descent.maxIterations = o.maxIterations;
+    opts.multiscale.descent.energyTolerance = o.energyTolerance;
+    opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
+    opts.margin = o.margin;
+    opts.refinementMarginCells = o.refinementMargin;
+    opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
+    opts.validate();
+    if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
+        OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
+                                               << opts.multiscale.maxLevel << "], got "
+                                               << o.deformationLevel);
+    }
+
+    // The output directory must be usable before hours of work.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::create_directories(o.outDir, ec);
+    if (!fs::is_directory(o.outDir)) {
+        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
+                                            << o.outDir << "'"
+                                            << (ec ? ": " + ec.message() : std::string()));
+    }
+
+    const Surface<D>& source = surfaceOf<D>(in[0]);
+    const Surface<D>& target = surfaceOf<D>(in[1]);
+    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
+
+    ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel);
+    progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
+                     "D, " + toString(opts.multiscale.kind) + " energy, levels " +
+                     std::to_string(opts.multiscale.minLevel) + ".." +
+                     std::to_string(opts.multiscale.maxLevel) + ")");
+    MatchObserver observer;
+    observer.levelStart = [&](const LevelSummary& s) {
+        progress.levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
+    };
+    observer.iteration = [&](const solver::IterationInfo& i) { progress.iteration(i); };
+    observer.levelEnd = [&](const LevelSummary& s) { progress.levelEnd(s); };
+
+    SignalInterrupter interrupter;
+    const MatchResult<D> result = match<D>(source, target, placement, opts, observer, &interrupter);
+    const bool interrupted = result.isInterrupted() || wasSignalled();
+    if (!result.lattice) {
+        // Stopped before the first level had a lattice: nothing to write.
+        throw Interrupted{};
+    }
+
+    // Everything is computed in memory first, then written file by file (each atomically).
+    const Clock::time_point writeStart = Clock::now();
+    progress.message("writing " + o.outDir);
+    const solver::Report& last = result.levels.back().report;
+    openvdb::Vec3SGrid::Ptr deformation =
+        makeDeformationGrid<D>(*result.lattice, result.displacement, placement, o.deformationLevel);
+    deformation->insertMeta("vdbmatch_version", openvdb::StringMetadata(VDBMATCH_VERSION));
+    deformation->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
+    deformation->insertMeta("vdbmatch_energy",
+                            openvdb::StringMetadata(toString(opts.multiscale.kind)));
+    deformation->insertMeta(
+        "vdbmatch_levels", openvdb::StringMetadata(std::to_string(opts.multiscale.minLevel) + ".." +
+                                                   std::to_string(result.lattice->level())));
+    deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
+    deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
+    deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
+    deformation->insertMeta("vdbmatch_c_vol", openvdb::DoubleMetadata(p.cVol));
+    deformation->insertMeta("vdbmatch_q", openvdb::DoubleMetadata(p.q));
+    deformation->insertMeta("vdbmatch_theta", openvdb::DoubleMetadata(p.theta));
+    deformation->insertMeta("vdbmatch_tau", openvdb::DoubleMetadata(p.tau));
+    deformation->insertMeta("vdbmatch_margin", openvdb::DoubleMetadata(opts.margin));
+    deformation->insertMeta("vdbmatch_energy_total", openvdb::DoubleMetadata(last.energy));
+    deformation->insertMeta("vdbmatch_energy_match",
+                            openvdb::DoubleMetadata(last.terms.match[0] + last.terms.match[1]));
+    deformation->insertMeta("vdbmatch_energy_mem",
+                            openvdb::DoubleMetadata(last.terms.mem[0] + last.terms.mem[1]));
+    deformation->insertMeta("vdbmatch_energy_bend",
+                            openvdb::DoubleMetadata(last.terms.bend[0] + last.terms.bend[1]));
+    deformation->insertMeta("vdbmatch_energy_vol",
+                            openvdb::DoubleMetadata(last.terms.vol[0] + last.terms.vol[1]));
+    deformation->insertMeta("vdbmatch_residual_mean",
+                            openvdb::DoubleMetadata(result.residual.meanWorld));
+    deformation->insertMeta("vdbmatch_residual_max",
+                            openvdb::DoubleMetadata(result.residual.maxWorld));
+    deformation->insertMeta("vdbmatch_min_jacobian", openvdb::DoubleMetadata(result.minJacobian));
+    deformation->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
+
+    // The deformed shape as a level set, on the source's grid when it came as one.
+    openvdb::math::Transform::Ptr xform = in[0].transform;
+    if (!xform) {
+        const double voxel = placement.toWorldLength(std::ldexp(1.0, -result.lattice->level()));
+        xform = openvdb::math::Transform::createLinearTransform(voxel);
+    }
+    openvdb::FloatGrid::Ptr deformed = levelSetFromSurface<D>(result.deformedSource, *xform, 3.0);
+    deformed->setName("surface");
+    deformed->setGridClass(openvdb::GRID_LEVEL_SET);
+    deformed->insertMeta("vdbmatch_version", openvdb::StringMetadata(VDBMATCH_VERSION));
+    deformed->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
+    deformed->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
+
+    const std::string dir = o.outDir;
+    openvdb::MetaMap fileMeta;
+    fileMeta.insertMeta("creator",
+                        openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
+    writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
+    writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
+    writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
+                        [&](std::ostream& os) { writeObj(os, result.deformedSource); });
+    const bool converged = last.status == solver::Status::Converged;
+    const std::string status = interrupted ? "interrupted"
+                               : converged ? "converged"
+                                           : "not converged";
+    const double writeSeconds = secondsSince(writeStart);
+    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds);
+    writeFileAtomically((fs::path(dir) / "report.json").string(),
+                        [&](std::ostream& os) { os << report; });
+
+    out << "vdb_match: " << status << "; energy " << fixed("%.6e", last.energy)
+        << ", residual mean " << fixed("%.3e", result.residual.meanWorld) << " max "
+        << fixed("%.3e", result.residual.maxWorld) << " (world units; "
+        << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
+        << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
+        << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n"
+        << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string() << ", deformed.vdb, "
+        << "deformed.obj, report.json\n";
+    out.flush();
+    if (interrupted) return EXIT_INTERRUPTED;
+    if (o.strict && !converged) return EXIT_NOT_CONVERGED;
+    return EXIT_OK;
+}
+
+} // namespace
+
+std::string
+matchOptionHelp()
+{
+    return optionHelp(matchOptionTable());
+}
+
+int
+runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out, std::ostream& err)
+{
+    const MatchCliOptions o = parseMatchOptions(argc, argv, first);
+    openvdb::initialize();
+    SignalScope signals;
+    std::optional<tbb::global_control> threadLimit;
+    if (o.threads > 0) {
+        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
+    }
+    auto say = [&](const std::string& text) {
+        if (!o.quiet) err << PROGRAM << ": " << text << std::endl;
+    };
+    Shape in[2];
+    say("reading " + o.source);
+    in[0] = readInput(o.source, o.grid.empty() ? o.sourceGrid : o.grid);
+    checkInterrupted();
+    say("reading " + o.target);
+    in[1] = readInput(o.target, o.grid.empty() ? o.targetGrid : o.grid);
+    checkInterrupted();
+    if (in[0].dim != in[1].dim) {
+        OPENVDB_THROW(openvdb::ValueError, "'" << o.source << "' is a " << in[0].dim
+                                               << "D shape but '" << o.target << "' is "
+                                               << in[1].dim << "D");
+    }
+    return in[0].dim == 2 ? runMatch<2>(o, in, out, err) : runMatch<3>(o, in, out, err);
+}
+
+} // namespace cli
+} // namespace vdbmatch

@@ -1,0 +1,306 @@
+/// @file Match.cc
+#include "Match.h"
+
+#include <vdbmatch/lattice/AdaptiveLattice.h>
+#include <vdbmatch/multiscale/Prolongation.h>
+
+#include <openvdb/Exceptions.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace vdbmatch {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double
+secondsSince(Clock::time_point t0)
+{
+    return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+template <int D>
+Vec<D>
+toUnit(const UnitBoxPlacement& placement, const Vec<D>& world)
+{
+    openvdb::Vec3d w(0.0);
+    for (int a = 0; a < D; ++a)
+        w[a] = world[a];
+    const openvdb::Vec3d u = placement.toUnit(w);
+    Vec<D> out;
+    for (int a = 0; a < D; ++a)
+        out[a] = u[a];
+    return out;
+}
+
+template <int D>
+Vec<D>
+toWorld(const UnitBoxPlacement& placement, const Vec<D>& unit)
+{
+    openvdb::Vec3d u(0.5);
+    for (int a = 0; a < D; ++a)
+        u[a] = unit[a];
+    const openvdb::Vec3d w = placement.toWorld(u);
+    Vec<D> out;
+    for (int a = 0; a < D; ++a)
+        out[a] = w[a];
+    return out;
+}
+
+template <int D>
+Surface<D>
+placed(const Surface<D>& world, const UnitBoxPlacement& placement, const char* what)
+{
+    Surface<D> unit = world;
+    for (Vec<D>& p : unit.points) {
+        p = toUnit<D>(placement, p);
+        for (int a = 0; a < D; ++a) {
+            if (!(p[a] > 0 && p[a] < 1)) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              "match: the " << what
+                                            << " does not fit in the unit box with this placement "
+                                               "(a vertex maps outside (0,1)^d)");
+            }
+        }
+    }
+    return unit;
+}
+
+/// Extra distance to allow for the error of a coarse tier of a sampler at x.
+template <int D>
+Real
+tierSlack(const FieldSampler<D>& sampler, const Vec<D>& x)
+{
+    const int tier = sampler.findTier(x);
+    return tier <= 0 ? Real(0) : sampler.voxelSize(std::size_t(tier));
+}
+
+} // namespace
+
+MatchOptions
+MatchOptions::defaults(int dim)
+{
+    MatchOptions opts;
+    opts.multiscale = multiscale::MultiscaleOptions::defaults(dim);
+    return opts;
+}
+
+void
+MatchOptions::validate() const
+{
+    multiscale.validate();
+    if (!(margin >= 0 && margin < 0.5)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: margin must be in [0, 0.5), got " << margin);
+    }
+    if (!(refinementMarginCells >= 0) || !std::isfinite(refinementMarginCells)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: refinementMarginCells must be finite and >= 0, got "
+                          << refinementMarginCells);
+    }
+    if (coarsestLevel > multiscale.minLevel) {
+        OPENVDB_THROW(openvdb::ValueError, "MatchOptions: coarsestLevel ("
+                                               << coarsestLevel << ") must not exceed minLevel ("
+                                               << multiscale.minLevel << ")");
+    }
+}
+
+template <int D>
+bool
+MatchResult<D>::isComplete() const
+{
+    return lattice && !isInterrupted() && !levels.empty();
+}
+
+template <int D>
+LatticeSummary
+summarize(const SimplexLattice<D>& lattice)
+{
+    const LatticeStats stats = lattice.stats();
+    LatticeSummary s;
+    s.cells = lattice.cellCount();
+    s.simplices = lattice.simplexCount();
+    s.nodes = stats.nodes;
+    s.unknowns = stats.freeNodes;
+    s.hangingNodes = stats.hangingNodes;
+    s.denseNodes = stats.denseNodes;
+    s.cellsPerLog2Size = stats.cellsPerLog2Size;
+    return s;
+}
+
+template <int D>
+Real
+lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
+{
+    const auto& cells = lattice.cells();
+    const auto& paths = KuhnSplit<D>::path();
+    const auto& axes = KuhnSplit<D>::axis();
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, cells.size()), Real(1),
+        [&](const tbb::blocked_range<std::size_t>& r, Real best) {
+            for (std::size_t ci = r.begin(); ci != r.end(); ++ci) {
+                const auto& cell = cells[ci];
+                const Real side = lattice.h() * Real(1 << cell.log2Size);
+                for (std::size_t p = 0; p < paths.size(); ++p) {
+                    Mat<D> A = Mat<D>::Identity();
+                    for (int m = 1; m <= D; ++m) {
+                        const int a = axes[p][m];
+                        const auto from = cell.corners[paths[p][m - 1]];
+                        const auto to = cell.corners[paths[p][m]];
+                        A.col(a) += (u.col(to) - u.col(from)) / side;
+                    }
+                    best = std::max(best, A.norm());
+                }
+            }
+            return best;
+        },
+        [](Real a, Real b) { return std::max(a, b); });
+}
+
+template <int D>
+MatchResult<D>
+match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement& placement,
+      const MatchOptions& optsIn, const MatchObserver& observer,
+      openvdb::util::NullInterrupter* interrupter)
+{
+    const Clock::time_point start = Clock::now();
+    optsIn.validate();
+    checkSurface(source, "source");
+    checkSurface(target, "target");
+    MatchOptions opts = optsIn;
+    // The shape operator's eigenvalue floor is an energy parameter (tab:parameters).
+    opts.sampler.fields.tau = opts.multiscale.energy.tau;
+    opts.sampler.threaded = opts.threaded;
+
+    const Surface<D> unitSource = placed(source, placement, "source");
+    const Surface<D> unitTarget = placed(target, placement, "target");
+    const int coarsestLevel =
+        opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel;
+
+    MatchResult<D> result;
+    result.placement = placement;
+    std::shared_ptr<const FieldSampler<D>> lastTarget;
+    LevelSummary pending;
+
+    const multiscale::ContextLevelBuilder<D> builder =
+        [&](const multiscale::LevelContext<D>& context) {
+            const int l = context.level;
+            const Real h = std::ldexp(Real(1), -l);
+            LevelSummary summary;
+            summary.level = l;
+
+            Clock::time_point t0 = Clock::now();
+            multiscale::Level<D> level;
+            level.shape1 = buildShapeSampler<D>(unitSource, l, opts.sampler);
+            level.shape2 = buildShapeSampler<D>(unitTarget, l, opts.sampler);
+            summary.fieldSeconds = secondsSince(t0);
+
+            t0 = Clock::now();
+            const Real sigma = opts.multiscale.energy.sigmaFactor * h;
+            const Real reach = sigma + (opts.refinementMarginCells + std::sqrt(Real(D)) / 2) * h;
+            std::unique_ptr<multiscale::PiecewiseLinearInterpolator<D>> previous;
+            Real lipschitz = 1;
+            if (context.previousLattice) {
+                previous = std::make_unique<multiscale::PiecewiseLinearInterpolator<D>>(
+                    *context.previousLattice);
+                lipschitz =
+                    lipschitzBound<D>(*context.previousLattice, *context.previousDisplacement);
+            }
+            const FieldSampler<D>& d1 = *level.shape1;
+            const FieldSampler<D>& d2 = *level.shape2;
+            const NodeVectors<D>* uPrev = context.previousDisplacement;
+            const RefinementPredicate<D> needsFine = [&](const Vec<D>& c, Real radius) {
+                Real d;
+                if (!d1.sampleDistance(c, d) || std::abs(d) < reach + radius + tierSlack(d1, c)) {
+                    return true;
+                }
+                Vec<D> y = c;
+                if (previous) {
+                    Vec<D> du;
+                    if (previous->evaluate(*uPrev, c, du)) y += du;
+                }
+                return !d2.sampleDistance(y, d) ||
+                       std::abs(d) < reach + lipschitz * radius + tierSlack(d2, y);
+            };
+            level.lattice = std::make_shared<SimplexLattice<D>>(
+                buildAdaptiveLattice<D>(l, std::max(0, l - coarsestLevel), needsFine,
+                                        context.previousLattice, opts.threaded));
+            summary.latticeSeconds = secondsSince(t0);
+            summary.lattice = summarize<D>(*level.lattice);
+            if (observer.levelStart) observer.levelStart(summary);
+            pending = summary;
+            lastTarget = level.shape2;
+            return level;
+        };
+    const multiscale::LevelObserver levelEnd = [&](const solver::Report& report) {
+        pending.report = report;
+        result.levels.push_back(pending);
+        if (observer.levelEnd) observer.levelEnd(result.levels.back());
+    };
+
+    const multiscale::MultiscaleDriver<D> driver(opts.multiscale);
+    multiscale::MultiscaleResult<D> run =
+        driver.run(builder, observer.iteration, levelEnd, opts.threaded, interrupter);
+    if (result.levels.size() < run.reports.size()) {
+        // Interrupted before a level started: no lattice was built for it.
+        LevelSummary stopped;
+        stopped.level = run.reports.back().level;
+        stopped.report = run.reports.back();
+        result.levels.push_back(stopped);
+    }
+    result.lattice = run.lattice;
+    result.displacement = std::move(run.displacement);
+
+    result.deformedSource = source;
+    if (result.lattice) {
+        const multiscale::PiecewiseLinearInterpolator<D> phi(*result.lattice);
+        double sum = 0, maxAbs = 0;
+        std::size_t n = 0;
+        for (std::size_t i = 0; i < unitSource.points.size(); ++i) {
+            const Vec<D>& x = unitSource.points[i];
+            Vec<D> du = Vec<D>::Zero();
+            phi.evaluate(result.displacement, x, du);
+            const Vec<D> y = x + du;
+            result.deformedSource.points[i] = toWorld<D>(placement, y);
+            Real d;
+            if (lastTarget && lastTarget->sampleDistance(y, d)) {
+                sum += std::abs(d);
+                maxAbs = std::max<double>(maxAbs, std::abs(d));
+                ++n;
+            }
+        }
+        result.residual.samples = n;
+        result.residual.meanUnit = n ? sum / double(n) : 0.0;
+        result.residual.maxUnit = maxAbs;
+        result.residual.meanWorld = placement.toWorldLength(result.residual.meanUnit);
+        result.residual.maxWorld = placement.toWorldLength(result.residual.maxUnit);
+        for (auto it = result.levels.rbegin(); it != result.levels.rend(); ++it) {
+            if (it->report.iterations > 0 || it->report.energy < INF) {
+                result.minJacobian = it->report.minJacobian;
+                break;
+            }
+        }
+    }
+    result.totalSeconds = secondsSince(start);
+    return result;
+}
+
+template struct MatchResult<2>;
+template struct MatchResult<3>;
+template LatticeSummary summarize<2>(const SimplexLattice<2>&);
+template LatticeSummary summarize<3>(const SimplexLattice<3>&);
+template Real lipschitzBound<2>(const SimplexLattice<2>&, const NodeVectors<2>&);
+template Real lipschitzBound<3>(const SimplexLattice<3>&, const NodeVectors<3>&);
+template MatchResult<2> match<2>(const Surface<2>&, const Surface<2>&, const UnitBoxPlacement&,
+                                 const MatchOptions&, const MatchObserver&,
+                                 openvdb::util::NullInterrupter*);
+template MatchResult<3> match<3>(const Surface<3>&, const Surface<3>&, const UnitBoxPlacement&,
+                                 const MatchOptions&, const MatchObserver&,
+                                 openvdb::util::NullInterrupter*);
+
+} // namespace vdbmatch

@@ -1,0 +1,153 @@
+/// @file Match.h
+/// @brief match(): the whole method of the paper on two shapes given in world space: placement
+///        in Omega = (0,1)^d, per-level signed distances and adaptive lattices, the multiscale
+///        descent, and the matching residual of the result.
+///
+/// For l = minLevel..maxLevel (h_l = 2^-l, sigma = 2 h_l):
+/// 1. the signed distances d1, d2 of the placed shapes are rebuilt at h_l (buildShapeSampler:
+///    an exact narrow band at h_l over coarser tiers that cover all of Omega, so that d2 can be
+///    sampled at phi(x) anywhere);
+/// 2. the lattice is refined to cells of side h_l where a band term can live, i.e. near M1 and
+///    near phi_{l-1}^{-1}(M2) (phi_{l-1} the result of the previous level, Id at minLevel):
+///    a cell is fine if |d1| < r or |d2 o phi_{l-1}| < r at some point of it, with
+///    r = sigma + (refinementMarginCells + sqrt(d)/2) h_l; elsewhere cells grow by 2:1 up to the
+///    side h_{minLevel} of the first level (buildAdaptiveLattice). No new cell is larger than the
+///    cell of level l-1 that contains it, so prolongation is exact and det D phi > 0 carries over;
+/// 3. the descent of the paper runs on that lattice from the prolongated phi_{l-1}
+///    (MultiscaleDriver, Descent, H1Metric).
+/// At the end, the source surface's vertices v are moved by phi and the residual |d2(phi(v))|
+/// is measured with the finest target sampler.
+///
+/// Spaces: the input surfaces and every output length marked "world" are in the inputs' world
+/// space; the lattice, the displacement and the fields are in Omega units
+/// (unit = placement.scale * (world - placement.worldOrigin), UnitBox.h).
+/// @see paper sec:numerics, tab:parameters, eq:Esym, eq:Ecomparison
+#pragma once
+
+#include <vdbmatch/Types.h>
+#include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/Surface.h>
+#include <vdbmatch/geometry/UnitBox.h>
+#include <vdbmatch/lattice/SimplexLattice.h>
+#include <vdbmatch/multiscale/MultiscaleDriver.h>
+
+#include <openvdb/util/NullInterrupter.h>
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace vdbmatch {
+
+/// Default extra margin of the fine region, in cells of side h_l (see the file comment): the
+/// band moves by up to about one cell during a level's descent.
+constexpr double DEFAULT_REFINEMENT_MARGIN_CELLS = 1.0;
+
+struct MatchOptions
+{
+    /// Levels, energy parameters and kind, metric and descent options (tab:parameters).
+    multiscale::MultiscaleOptions multiscale = multiscale::MultiscaleOptions::defaults(3);
+    /// Placement margin on each side of the shapes' common box, Omega units, [0, 0.5).
+    double margin = DEFAULT_UNIT_BOX_MARGIN;
+    /// Signed-distance tiers and shape-field options (tau, Hessian smoothing) per level.
+    ShapeSamplerOptions sampler;
+    /// Extra width of the fine region, in cells (>= 0).
+    double refinementMarginCells = DEFAULT_REFINEMENT_MARGIN_CELLS;
+    /// Coarsest cells: side h_{coarsestLevel}; <= 0 selects multiscale.minLevel.
+    int coarsestLevel = 0;
+    bool threaded = true;
+
+    /// tab:parameters for dimension 2 or 3.
+    static MatchOptions defaults(int dim);
+    /// Throws openvdb::ValueError naming the first invalid field.
+    void validate() const;
+};
+
+/// The lattice of one level, compared with the dense lattice of the same h.
+struct LatticeSummary
+{
+    std::size_t cells = 0, simplices = 0, nodes = 0, unknowns = 0, hangingNodes = 0;
+    std::size_t denseNodes = 0; ///< (2^l + 1)^d
+    std::vector<std::size_t> cellsPerLog2Size;
+};
+
+/// One level of a match.
+struct LevelSummary
+{
+    int level = 0;
+    LatticeSummary lattice;
+    solver::Report report;
+    double fieldSeconds = 0;   ///< signed distances and shape fields of both shapes
+    double latticeSeconds = 0; ///< adaptive lattice
+};
+
+/// |d2(phi(v))| over the vertices v of M1.
+struct MatchResidual
+{
+    double meanWorld = 0, maxWorld = 0; ///< world units
+    double meanUnit = 0, maxUnit = 0;   ///< Omega units (fraction of the unit box)
+    std::size_t samples = 0;
+};
+
+template <int D> struct MatchResult
+{
+    UnitBoxPlacement placement;
+    /// Lattice of the last level run and the displacement phi - Id on its nodes (Omega units).
+    std::shared_ptr<const SimplexLattice<D>> lattice;
+    NodeVectors<D> displacement;
+    std::vector<LevelSummary> levels;
+    /// The source surface moved by phi, world space (same elements as the source).
+    Surface<D> deformedSource;
+    MatchResidual residual;
+    double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
+    double totalSeconds = 0;
+
+    bool isInterrupted() const
+    {
+        return !levels.empty() && levels.back().report.status == solver::Status::Interrupted;
+    }
+    /// True if no level was interrupted and the last one ran.
+    bool isComplete() const;
+};
+
+/// Progress of match(), on the calling thread. Signatures:
+/// iteration(const solver::IterationInfo&), levelStart(const LevelSummary&) (lattice and times
+/// filled, report empty), levelEnd(const LevelSummary&).
+struct MatchObserver
+{
+    solver::IterationObserver iteration;
+    std::function<void(const LevelSummary&)> levelStart;
+    std::function<void(const LevelSummary&)> levelEnd;
+};
+
+/// Matches @a source (M1) onto @a target (M2).
+/// @param source, target  closed surfaces (3D: triangles) or curves (2D: segments), world space
+/// @param placement       world -> Omega map (placeInUnitBox of both shapes)
+/// @param opts            see MatchOptions
+/// @param observer        progress callbacks, may be empty
+/// @param interrupter     checked between stages and in the descent; when it fires, the result
+///                        holds the last accepted iterate of the level that was running
+///                        (isInterrupted()), or no lattice if no level had started
+/// @throw openvdb::ValueError for invalid options or shapes (checkSurface) and if a placed
+///        shape leaves [0,1]^d
+template <int D>
+MatchResult<D> match(const Surface<D>& source, const Surface<D>& target,
+                     const UnitBoxPlacement& placement, const MatchOptions& opts,
+                     const MatchObserver& observer = {},
+                     openvdb::util::NullInterrupter* interrupter = nullptr);
+
+/// Summary of a lattice (counts, and the dense lattice of the same level).
+template <int D> LatticeSummary summarize(const SimplexLattice<D>& lattice);
+
+/// The Lipschitz constant of phi = Id + u on a lattice: the largest spectral norm of D phi over
+/// the simplices (bounded above by the Frobenius norm, which is what is returned).
+template <int D> Real lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u);
+
+extern template MatchResult<2> match<2>(const Surface<2>&, const Surface<2>&,
+                                        const UnitBoxPlacement&, const MatchOptions&,
+                                        const MatchObserver&, openvdb::util::NullInterrupter*);
+extern template MatchResult<3> match<3>(const Surface<3>&, const Surface<3>&,
+                                        const UnitBoxPlacement&, const MatchOptions&,
+                                        const MatchObserver&, openvdb::util::NullInterrupter*);
+
+} // namespace vdbmatch

@@ -1,0 +1,164 @@
+/// @file DeformationIO.cc
+#include "DeformationIO.h"
+
+#include <vdbmatch/multiscale/Prolongation.h>
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/io/File.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <memory>
+#include <vector>
+
+namespace vdbmatch {
+
+namespace {
+
+/// World z of the plane of 2D shapes: the centre of the placed box (z = 1/2 in Omega).
+double
+planeWorldZ(const UnitBoxPlacement& placement)
+{
+    return placement.toWorld(openvdb::Vec3d(0.0, 0.0, 0.5)).z();
+}
+
+} // namespace
+
+template <int D>
+openvdb::Vec3SGrid::Ptr
+makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
+                    const UnitBoxPlacement& placement, int outputLevel, bool threaded)
+{
+    using LeafT = openvdb::Vec3SGrid::TreeType::LeafNodeType;
+    if (std::size_t(u.cols()) != lattice.nodeCount()) {
+        OPENVDB_THROW(openvdb::ValueError, "makeDeformationGrid: expected " << lattice.nodeCount()
+                                                                            << " node values, got "
+                                                                            << u.cols());
+    }
+    const int level = outputLevel <= 0 ? lattice.level() : outputLevel;
+    if (level > lattice.level() || level > 12) {
+        OPENVDB_THROW(openvdb::ValueError, "makeDeformationGrid: output level "
+                                               << level << " must be in [1, " << lattice.level()
+                                               << "]");
+    }
+    const int n = 1 << level; // nodes 0..n per axis
+    const double H = std::ldexp(1.0, -level);
+    const double toWorld = 1.0 / placement.scale;
+
+    const multiscale::PiecewiseLinearInterpolator<D> phi(lattice);
+    const int leaves1 = (n + 1 + int(LeafT::DIM) - 1) / int(LeafT::DIM);
+    const int leavesZ = D == 3 ? leaves1 : 1;
+    const std::size_t leafCount =
+        std::size_t(leaves1) * std::size_t(leaves1) * std::size_t(leavesZ);
+    std::vector<std::unique_ptr<LeafT>> leaves(leafCount);
+    std::vector<char> bad(leafCount, 0);
+
+    auto fill = [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t li = range.begin(); li != range.end(); ++li) {
+            const int bx = int(li % std::size_t(leaves1));
+            const int by = int((li / std::size_t(leaves1)) % std::size_t(leaves1));
+            const int bz = int(li / (std::size_t(leaves1) * std::size_t(leaves1)));
+            const openvdb::Coord origin(bx * int(LeafT::DIM), by * int(LeafT::DIM),
+                                        bz * int(LeafT::DIM));
+            auto leaf = std::make_unique<LeafT>(origin, openvdb::Vec3s(0.0f), false);
+            const int zEnd = D == 3 ? int(LeafT::DIM) : 1;
+            for (int k = 0; k < zEnd; ++k) {
+                for (int j = 0; j < int(LeafT::DIM); ++j) {
+                    for (int i = 0; i < int(LeafT::DIM); ++i) {
+                        const openvdb::Coord ijk = origin.offsetBy(i, j, k);
+                        if (ijk[0] > n || ijk[1] > n || ijk[2] > (D == 3 ? n : 0)) continue;
+                        Vec<D> x;
+                        for (int a = 0; a < D; ++a)
+                            x[a] = ijk[a] * H;
+                        Vec<D> du = Vec<D>::Zero();
+                        phi.evaluate(u, x, du);
+                        openvdb::Vec3s value(0.0f);
+                        for (int a = 0; a < D; ++a) {
+                            value[a] = float(du[a] * toWorld);
+                            if (!std::isfinite(value[a])) bad[li] = 1;
+                        }
+                        leaf->setValueOn(ijk, value);
+                    }
+                }
+            }
+            leaves[li] = std::move(leaf);
+        }
+    };
+    const tbb::blocked_range<std::size_t> all(0, leafCount);
+    if (threaded) {
+        tbb::parallel_for(all, fill);
+    } else {
+        fill(all);
+    }
+    for (char b : bad) {
+        if (b) OPENVDB_THROW(openvdb::ValueError, "makeDeformationGrid: non-finite displacement");
+    }
+
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    for (auto& leaf : leaves)
+        grid->tree().addLeaf(leaf.release());
+    auto xform = openvdb::math::Transform::createLinearTransform(H * toWorld);
+    const openvdb::Vec3d origin = placement.worldOrigin;
+    xform->postTranslate(
+        openvdb::Vec3d(origin.x(), origin.y(), D == 3 ? origin.z() : planeWorldZ(placement)));
+    grid->setTransform(xform);
+    grid->setName(DEFORMATION_GRID_NAME);
+    grid->setGridClass(openvdb::GRID_UNKNOWN);
+    grid->setVectorType(openvdb::VEC_CONTRAVARIANT_RELATIVE);
+    grid->setIsInWorldSpace(true);
+    return grid;
+}
+
+openvdb::Vec3SGrid::Ptr
+readDeformation(const std::string& path)
+{
+    openvdb::GridBase::Ptr base;
+    try {
+        openvdb::io::File file(path);
+        file.open(false);
+        if (!file.hasGrid(DEFORMATION_GRID_NAME)) {
+            file.close();
+            OPENVDB_THROW(openvdb::ValueError, "readDeformation: file '"
+                                                   << path << "' has no grid named '"
+                                                   << DEFORMATION_GRID_NAME << "'");
+        }
+        base = file.readGrid(DEFORMATION_GRID_NAME);
+        file.close();
+    } catch (const openvdb::ValueError&) {
+        throw;
+    } catch (const std::exception& e) {
+        OPENVDB_THROW(openvdb::IoError,
+                      "readDeformation: cannot read '" << path << "': " << e.what());
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base);
+    if (!grid) {
+        OPENVDB_THROW(openvdb::ValueError, "readDeformation: grid '"
+                                               << DEFORMATION_GRID_NAME << "' in '" << path
+                                               << "' is a " << base->valueType()
+                                               << " grid, expected vec3s");
+    }
+    if (!grid->transform().isLinear() || !grid->hasUniformVoxels()) {
+        OPENVDB_THROW(openvdb::ValueError, "readDeformation: grid in '"
+                                               << path
+                                               << "' must have a linear transform with uniform "
+                                                  "voxels");
+    }
+    for (auto v = grid->cbeginValueAll(); v; ++v) {
+        const openvdb::Vec3s x = *v;
+        if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2])) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "readDeformation: non-finite value in '" << path << "'");
+        }
+    }
+    return grid;
+}
+
+template openvdb::Vec3SGrid::Ptr makeDeformationGrid<2>(const SimplexLattice<2>&,
+                                                        const NodeVectors<2>&,
+                                                        const UnitBoxPlacement&, int, bool);
+template openvdb::Vec3SGrid::Ptr makeDeformationGrid<3>(const SimplexLattice<3>&,
+                                                        const NodeVectors<3>&,
+                                                        const UnitBoxPlacement&, int, bool);
+
+} // namespace vdbmatch
