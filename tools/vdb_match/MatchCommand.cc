@@ -50,6 +50,7 @@ struct MatchCliOptions
     double energyTolerance = solver::DescentOptions().energyTolerance;
     double gradientTolerance = solver::DescentOptions().relativeGradientTolerance;
     double metricTau = solver::DEFAULT_METRIC_TAU_FACTOR;
+    double metricTolerance = solver::H1MetricOptions().cgTolerance;
     int deformationLevel = 0;
     int progressEvery = 10;
     int threads = 0;
@@ -154,6 +155,12 @@ matchOptionTable()
          "weight of the H1 metric M + tau L as a factor of sigma^2 (default " +
              formatNumber(d.metricTau) + ")",
          [](O& o, const std::string& v) { o.metricTau = parseDouble("--metric-tau", v); }},
+        {"--metric-tolerance", "X", "Descent",
+         "relative residual of the conjugate-gradient solve of the metric (default " +
+             formatNumber(d.metricTolerance) + ")",
+         [](O& o, const std::string& v) {
+             o.metricTolerance = parseDouble("--metric-tolerance", v);
+         }},
         {"--strict", nullptr, "Descent",
          "exit with code 4 if the finest level did not converge (outputs are still written)",
          [](O& o, const std::string&) { o.strict = true; }},
@@ -472,6 +479,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                                << opts.multiscale.maxLevel);
     }
     opts.multiscale.metricTauFactor = o.metricTau;
+    opts.multiscale.metric.cgTolerance = o.metricTolerance;
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
