@@ -232,6 +232,26 @@ TEST(Descent, CircleToEllipse2D)
     checkMultiscaleMatch<2>(opts);
 }
 
+TEST(Descent, CircleToEllipse2DLimitedMemoryBfgs)
+{
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    opts.minLevel = 4;
+    opts.maxLevel = 6;
+    opts.descent.method = DescentMethod::LBFGS;
+    checkMultiscaleMatch<2>(opts);
+}
+
+TEST(Descent, ParsesMethods)
+{
+    EXPECT_EQ(parseDescentMethod("ncg"), DescentMethod::NonlinearCG);
+    EXPECT_EQ(parseDescentMethod("lbfgs"), DescentMethod::LBFGS);
+    EXPECT_STREQ(toString(DescentMethod::LBFGS), "lbfgs");
+    EXPECT_THROW(parseDescentMethod("newton"), openvdb::ValueError);
+    DescentOptions opts;
+    opts.lbfgsMemory = 0;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, SphereToEllipsoid3D)
 {
     MultiscaleOptions opts = MultiscaleOptions::defaults(3);

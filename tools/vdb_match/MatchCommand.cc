@@ -51,6 +51,7 @@ struct MatchCliOptions
     double gradientTolerance = solver::DescentOptions().relativeGradientTolerance;
     double metricTau = solver::DEFAULT_METRIC_TAU_FACTOR;
     double metricTolerance = solver::H1MetricOptions().cgTolerance;
+    solver::DescentMethod method = solver::DescentOptions().method;
     int deformationLevel = 0;
     int progressEvery = 10;
     int threads = 0;
@@ -155,6 +156,15 @@ matchOptionTable()
          "weight of the H1 metric M + tau L as a factor of sigma^2 (default " +
              formatNumber(d.metricTau) + ")",
          [](O& o, const std::string& v) { o.metricTau = parseDouble("--metric-tau", v); }},
+        {"--optimizer", "NAME", "Descent",
+         "ncg (the paper's nonlinear conjugate gradients) or lbfgs (limited-memory BFGS in the "
+         "same metric) (default " + std::string(solver::toString(d.method)) + ")",
+         [](O& o, const std::string& v) {
+             if (v != "ncg" && v != "lbfgs") {
+                 throw UsageError("--optimizer expects 'ncg' or 'lbfgs', got '" + v + "'");
+             }
+             o.method = solver::parseDescentMethod(v);
+         }},
         {"--metric-tolerance", "X", "Descent",
          "relative residual of the conjugate-gradient solve of the metric (default " +
              formatNumber(d.metricTolerance) + ")",
@@ -398,6 +408,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
       << ", \"margin\": " << jsonNumber(opts.margin)
       << ", \"refinementMarginCells\": " << jsonNumber(opts.refinementMarginCells)
       << ", \"metricTauFactor\": " << jsonNumber(opts.multiscale.metricTauFactor)
+      << ", \"optimizer\": " << jsonString(solver::toString(opts.multiscale.descent.method))
+      << ", \"metricTolerance\": " << jsonNumber(opts.multiscale.metric.cgTolerance)
       << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
       << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
       << ", \"relativeGradientTolerance\": "
@@ -480,6 +492,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     }
     opts.multiscale.metricTauFactor = o.metricTau;
     opts.multiscale.metric.cgTolerance = o.metricTolerance;
+    opts.multiscale.descent.method = o.method;
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;

@@ -41,6 +41,21 @@ toString(ConvergenceTest test)
     return "unknown";
 }
 
+const char*
+toString(DescentMethod method)
+{
+    return method == DescentMethod::LBFGS ? "lbfgs" : "ncg";
+}
+
+DescentMethod
+parseDescentMethod(const std::string& name)
+{
+    if (name == "ncg") return DescentMethod::NonlinearCG;
+    if (name == "lbfgs") return DescentMethod::LBFGS;
+    OPENVDB_THROW(openvdb::ValueError,
+                  "parseDescentMethod: expected 'ncg' or 'lbfgs', got '" << name << "'");
+}
+
 void
 DescentOptions::validate() const
 {
@@ -56,6 +71,9 @@ DescentOptions::validate() const
         fail("energyTolerance must be finite and >= 0");
     if (energyWindow < 0) fail("energyWindow must be >= 0");
     if (restartInterval < 0) fail("restartInterval must be >= 0");
+    if (lbfgsMemory < 1) fail("lbfgsMemory must be >= 1");
+    if (!(maxTrialDisplacementCells > 0) || !std::isfinite(maxTrialDisplacementCells))
+        fail("maxTrialDisplacementCells must be finite and > 0");
     if (!(initialDisplacement > 0) || !std::isfinite(initialDisplacement))
         fail("initialDisplacement must be finite and > 0");
     lineSearch.validate();
@@ -158,6 +176,42 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     };
     Real slope = steepest();
     bool restarted = true;
+
+    // L-BFGS memory, oldest first, and the two-loop recursion p = -H g (see Descent.h).
+    struct Pair
+    {
+        NodeVectors<D> s, y, Gy;
+        Real rho;
+    };
+    const bool lbfgs = mOpts.method == DescentMethod::LBFGS;
+    std::vector<Pair> memory;
+    std::vector<Real> alpha;
+    NodeVectors<D> q;
+    auto lbfgsDirection = [&] {
+        if (memory.empty()) {
+            p = -r;
+            return;
+        }
+        alpha.assign(memory.size(), 0);
+        q = g;
+        p = r; // becomes G^{-1} q = r - sum alpha_i G^{-1} y_i
+        for (std::size_t k = memory.size(); k-- > 0;) {
+            const Pair& m = memory[k];
+            alpha[k] = m.rho * metric.pairing(q, m.s);
+            q -= alpha[k] * m.y;
+            p -= alpha[k] * m.Gy;
+        }
+        const Pair& newest = memory.back();
+        const Real yGy = metric.pairing(newest.y, newest.Gy);
+        const Real gamma = yGy > 0 ? 1 / (newest.rho * yGy) : 1;
+        p *= gamma;
+        for (std::size_t k = 0; k < memory.size(); ++k) {
+            const Pair& m = memory[k];
+            const Real b = m.rho * metric.pairing(m.y, p);
+            p += (alpha[k] - b) * m.s;
+        }
+        p = -p;
+    };
     std::vector<Real> history{E};
 
     while (true) {
@@ -175,6 +229,7 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         if (!ls.isAccepted()) {
             if (restarted) return finish(Status::LineSearchFailed);
             ++report.restarts;
+            memory.clear();
             slope = steepest();
             restarted = true;
             continue;
@@ -192,6 +247,16 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
             return finish(Status::Interrupted);
         }
         const Real ggNew = metric.pairing(gNew, rNew);
+        if (lbfgs) {
+            // The new pair: s = t p, y = gNew - g, G^{-1} y = rNew - r.
+            Pair pair{ls.step * p, gNew - g, rNew - r, 0};
+            const Real ys = metric.pairing(pair.y, pair.s);
+            if (ys > 0 && std::isfinite(ys)) {
+                pair.rho = 1 / ys;
+                if (int(memory.size()) == mOpts.lbfgsMemory) memory.erase(memory.begin());
+                memory.push_back(std::move(pair));
+            }
+        }
         Real beta = 0;
         switch (mOpts.update) {
         case ConjugateGradientUpdate::SteepestDescent:
@@ -216,14 +281,26 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         report.gradNorm = std::sqrt(std::max(gg, Real(0)));
 
         // Next direction; restart when it is not a descent direction.
-        p = beta * p - r;
-        slope = metric.pairing(g, p);
-        restarted = beta == 0;
+        if (lbfgs) {
+            lbfgsDirection();
+            slope = metric.pairing(g, p);
+            restarted = memory.empty();
+        } else {
+            p = beta * p - r;
+            slope = metric.pairing(g, p);
+            restarted = beta == 0;
+        }
         if (!(slope < 0)) {
             ++report.restarts;
+            memory.clear();
             p = -r;
             slope = -gg;
             restarted = true;
+        }
+        if (lbfgs && !memory.empty()) {
+            const Real pMax = p.size() ? p.cwiseAbs().maxCoeff() : 0.0;
+            const Real cap = pMax > 0 ? mOpts.maxTrialDisplacementCells * h / pMax : 1.0;
+            lineSearch.setInitialStep(std::min(Real(1), cap));
         }
         notify(report.iterations, ls.step, maxDisplacement, movedSteepest);
 

@@ -12,6 +12,17 @@
 /// The direction is reset to -r_k (a "restart") when <g_k, p_k> >= 0, every restartInterval
 /// iterations if set, and once after a failed line search before giving up.
 ///
+/// With DescentMethod::LBFGS the direction is instead p_k = -H_k g_k, H_k the limited-memory
+/// BFGS inverse Hessian built from the last m pairs s_i = u_{i+1} - u_i (vectors),
+/// y_i = g_{i+1} - g_i (co-vectors) over the initial inverse gamma_k G^{-1}, gamma_k =
+/// <y, s> / <y, G^{-1} y> from the newest pair (Nocedal & Wright, Numerical Optimization,
+/// alg. 7.4, with the metric G as the preconditioner). Since G^{-1} y_i = r_{i+1} - r_i, the
+/// two-loop recursion needs no metric solve beyond r_k: the cost per iteration is that of NCG
+/// plus O(m) vector operations and 3m stored vectors. The first trial step is 1 (capped so that
+/// no node moves by more than maxTrialDisplacementCells h); pairs with <y, s> <= 0 (possible
+/// under an Armijo-only search) are skipped, and the memory is cleared when -H g is not a
+/// descent direction.
+///
 /// Stopping rules (defaults in DescentOptions), checked before each iteration in this order:
 /// 1. gradient: ||g_k||_{G^{-1}} = sqrt(<g_k, r_k>) <= max(gradientTolerance,
 ///    relativeGradientTolerance * ||g_0||_{G^{-1}})                      -> Converged
@@ -42,6 +53,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <string>
 
 namespace vdbmatch {
 namespace solver {
@@ -103,6 +115,13 @@ using IterationObserver = std::function<void(const IterationInfo&)>;
 
 enum class ConjugateGradientUpdate { SteepestDescent, FletcherReeves, PolakRibierePlus };
 
+/// The descent method: the paper's nonlinear conjugate gradients, or limited-memory BFGS in the
+/// same metric (see the file comment).
+enum class DescentMethod { NonlinearCG, LBFGS };
+const char* toString(DescentMethod method);
+/// "ncg" or "lbfgs"; throws openvdb::ValueError otherwise.
+DescentMethod parseDescentMethod(const std::string& name);
+
 struct DescentOptions
 {
     /// Iteration limit per level.
@@ -114,12 +133,17 @@ struct DescentOptions
     /// Converged when E_{k-w} - E_k <= energyTolerance * |E_k|, w = energyWindow (0 disables).
     Real energyTolerance = 1e-5;
     int energyWindow = 5;
+    DescentMethod method = DescentMethod::NonlinearCG;
     ConjugateGradientUpdate update = ConjugateGradientUpdate::PolakRibierePlus;
+    /// L-BFGS: number of stored pairs (s, y).
+    int lbfgsMemory = 5;
     /// Reset to steepest descent every restartInterval iterations (0: only when needed).
     int restartInterval = 0;
     /// First trial step of a level (and after a restart following a failed search): the node
     /// moving most moves by initialDisplacement * h.
     Real initialDisplacement = 0.5;
+    /// L-BFGS: cap of the first trial step, in cells of side h of the moving node.
+    Real maxTrialDisplacementCells = 4;
     ArmijoOptions lineSearch;
 
     /// Throws openvdb::ValueError naming the first invalid field.
