@@ -93,8 +93,10 @@ check parameter-range 3 '' 'c_mem' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --c
 check match-3d 0 'converged|not converged' 'level 5 done' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3" --levels 3..5
 count=$((count + 1))
 if command -v vdb_print >/dev/null 2>&1; then
-    if vdb_print -l "$SCRATCH/m3/deformation.vdb" | grep -q 'displacement' &&
-        vdb_print -l "$SCRATCH/m3/deformed.vdb" | grep -q 'surface'; then
+    # (captured first: grep -q closing the pipe early would fail the pipeline under pipefail)
+    listing=$(vdb_print -l "$SCRATCH/m3/deformation.vdb" 2>&1; vdb_print -l "$SCRATCH/m3/deformed.vdb" 2>&1)
+    if grep -q 'Name: displacement' <<<"$listing" && grep -q 'vec3s' <<<"$listing" &&
+        grep -q 'Name: surface' <<<"$listing" && grep -qi 'class: level set' <<<"$listing"; then
         echo "ok   vdb_print"
     else
         fail "vdb_print: cannot list the outputs"

@@ -220,6 +220,13 @@ parseMatchOptions(int argc, const char* const* argv, int first)
         throw UsageError("the first level (" + std::to_string(*o.minLevel) +
                          ") is finer than the last (" + std::to_string(*o.maxLevel) + ")");
     }
+    for (const auto& [name, path] : {std::pair<std::string, std::string>{
+                                         o.sourceGrid.empty() ? o.grid : o.sourceGrid, o.source},
+                                     {o.targetGrid.empty() ? o.grid : o.targetGrid, o.target}}) {
+        if (!name.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
+            throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
+        }
+    }
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
