@@ -87,6 +87,8 @@ MatchOptions::defaults(int dim)
 {
     MatchOptions opts;
     opts.multiscale = multiscale::MultiscaleOptions::defaults(dim);
+    opts.multiscale.descent.energyTolerance = DEFAULT_MATCH_ENERGY_TOLERANCE;
+    opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     return opts;
 }
 

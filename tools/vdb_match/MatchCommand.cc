@@ -46,12 +46,13 @@ struct MatchCliOptions
     double margin = DEFAULT_UNIT_BOX_MARGIN;
     int hessianSmoothing = 0;
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
-    int maxIterations = solver::DescentOptions().maxIterations;
-    double energyTolerance = solver::DescentOptions().energyTolerance;
-    double gradientTolerance = solver::DescentOptions().relativeGradientTolerance;
-    double metricTau = solver::DEFAULT_METRIC_TAU_FACTOR;
-    double metricTolerance = solver::H1MetricOptions().cgTolerance;
-    solver::DescentMethod method = solver::DescentOptions().method;
+    int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
+    double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
+    double gradientTolerance =
+        MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
+    double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
+    double metricTolerance = MatchOptions::defaults(3).multiscale.metric.cgTolerance;
+    solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     int deformationLevel = 0;
     int progressEvery = 10;
     int threads = 0;
