@@ -29,8 +29,8 @@ inside, 3-voxel narrow band, world units), like Houdini's "VDB from Polygons":
 2D inputs (cf. the paper's "jump" example):
 
 - figure_a.polyline, figure_b.polyline: a person-like silhouette (head, neck, torso, two arms
-  with hands, two legs with feet), pose A standing with arms down, pose B jumping with arms
-  up and legs apart. Zero contour of a smooth union (width FIGURE_BLEND) of 2D round cones
+  with hands, two legs with feet), pose A standing with arms slightly out, pose B jumping
+  with arms raised halfway to the side (about 35 degrees) and legs apart. Zero contour of a smooth union (width FIGURE_BLEND) of 2D round cones
   (FIGURE_BODY, FIGURE_LIMBS), extracted by marching squares (spacing FIGURE_CONTOUR_SPACING)
   and resampled uniformly in arc length to FIGURE_POINTS points; checked to be a single closed
   curve, counter-clockwise and without self-intersections. Text format: see POLYLINE_HEADER.
@@ -334,21 +334,21 @@ FIGURE_BODY = (
     (0.0, 0.40, 0.16, 0.0, 0.05, 0.125),      # torso
 )
 FIGURE_LIMBS = {
-    "a": (  # standing, arms down, feet a little apart
-        (0.14, 0.44, 0.055, 0.30, 0.18, 0.047),   # upper arm
-        (0.30, 0.18, 0.047, 0.37, -0.09, 0.040),  # forearm
-        (0.37, -0.09, 0.045, 0.38, -0.13, 0.045),  # hand
-        (0.08, 0.03, 0.085, 0.12, -0.44, 0.065),  # thigh
-        (0.12, -0.44, 0.065, 0.14, -0.90, 0.05),  # shin
-        (0.14, -0.93, 0.045, 0.22, -0.95, 0.035),  # foot
+    "a": (  # standing, arms slightly out, feet a little apart
+        (0.15, 0.44, 0.075, 0.33, 0.22, 0.066),   # upper arm
+        (0.33, 0.22, 0.066, 0.45, -0.02, 0.058),  # forearm
+        (0.45, -0.02, 0.062, 0.47, -0.07, 0.06),  # hand
+        (0.08, 0.03, 0.10, 0.13, -0.44, 0.08),    # thigh
+        (0.13, -0.44, 0.08, 0.15, -0.90, 0.065),  # shin
+        (0.15, -0.93, 0.06, 0.24, -0.95, 0.05),   # foot
     ),
-    "b": (  # jumping: arms up in a V, legs apart
-        (0.14, 0.44, 0.055, 0.34, 0.64, 0.047),
-        (0.34, 0.64, 0.047, 0.46, 0.90, 0.040),
-        (0.46, 0.90, 0.045, 0.48, 0.95, 0.045),
-        (0.08, 0.03, 0.085, 0.27, -0.39, 0.065),
-        (0.27, -0.39, 0.065, 0.40, -0.82, 0.05),
-        (0.40, -0.85, 0.045, 0.47, -0.89, 0.035),
+    "b": (  # jumping: arms raised halfway to the side, legs apart
+        (0.15, 0.44, 0.075, 0.37, 0.31, 0.066),
+        (0.37, 0.31, 0.066, 0.56, 0.14, 0.058),
+        (0.56, 0.14, 0.062, 0.60, 0.11, 0.06),
+        (0.08, 0.03, 0.10, 0.18, -0.43, 0.08),
+        (0.18, -0.43, 0.08, 0.24, -0.89, 0.065),
+        (0.24, -0.92, 0.06, 0.33, -0.94, 0.05),
     ),
 }
 FIGURE_BLEND = 0.012          # smooth-union width (log-sum-exp), world units
