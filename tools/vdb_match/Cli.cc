@@ -22,6 +22,8 @@ helpText()
     s += "Usage:\n";
     s += "  vdb_match SOURCE TARGET -o OUTDIR [options]   (same as: vdb_match match ...)\n";
     s += "  vdb_match energy SOURCE.vdb TARGET.vdb [options]\n";
+    s += "  vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]\n";
+    s += "  vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]\n";
     s += "  vdb_match --help | --version\n\n";
     s += "Commands:\n";
     s += wrapHelp("[match] SOURCE TARGET",
@@ -33,10 +35,24 @@ helpText()
     s += wrapHelp("energy SOURCE.vdb TARGET.vdb",
                   "place both level sets in the unit box, resample them at --level and print "
                   "the terms of the matching energy of the identity deformation (phi = Id)");
+    s += wrapHelp("consistency PHI.vdb PSI.vdb",
+                  "measure a pair of deformations of M1 -> M2 (PHI) and M2 -> M1 (PSI), as the "
+                  "paper's tab:inverseError: |psi(phi(x)) - x| and |phi(psi(y)) - y| over the "
+                  "domain (L2 as rms, Linf) and over the shapes' vertices (mean, max), the "
+                  "residuals |d2(phi(x))| on M1 and |d1(psi(y))| on M2, det D phi and det D psi; "
+                  "world units and fractions of the domain size");
+    s += wrapHelp("slice PHI.vdb",
+                  "sample an axis-aligned plane of the domain into OUT.exr (channels d1, d2, "
+                  "displacement, det, residual and, with --inverse, inverse_error; world units) "
+                  "and write one PNG preview per channel, OUT.<channel>.png");
     s += "\nOptions of match, as --name VALUE or --name=VALUE.\n";
     s += matchOptionHelp();
     s += "\nOptions of energy.\n";
     s += energyOptionHelp();
+    s += "\nOptions of consistency.\n";
+    s += consistencyOptionHelp();
+    s += "\nOptions of slice.\n";
+    s += sliceOptionHelp();
     s += "\nOther:\n";
     s += wrapHelp("-h, --help", "print this help and exit");
     s += wrapHelp("--version", "print the version and exit");
@@ -45,9 +61,11 @@ helpText()
     s += wrapHelp("1", "usage error: unknown option, missing argument, malformed number, "
                        "contradictory options");
     s += wrapHelp("2", "I/O error: missing or unreadable file, output directory not writable");
-    s += wrapHelp("3", "invalid input: not a level set, several grids and no --grid, NaN or "
-                       "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
-                       "shapes that do not fit the domain, parameter out of range");
+    s +=
+        wrapHelp("3", "invalid input: not a level set, several grids and no --grid, NaN or "
+                      "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
+                      "shapes that do not fit the domain, not a deformation grid, a slice position "
+                      "outside the domain, parameter out of range");
     s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
     s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
                        "as interrupted");
@@ -74,7 +92,8 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                 << openvdb::getLibraryVersionString() << ")\n";
             return EXIT_OK;
         }
-        const bool explicitCommand = command == "energy" || command == "match";
+        const bool explicitCommand = command == "energy" || command == "match" ||
+                                     command == "consistency" || command == "slice";
         const int first = explicitCommand ? 2 : 1;
         for (int i = first; i < argc; ++i) {
             const std::string arg = argv[i];
@@ -90,6 +109,8 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
             }
         }
         if (command == "energy") return runEnergyCommand(argc, argv, first, out, err);
+        if (command == "consistency") return runConsistencyCommand(argc, argv, first, out, err);
+        if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
         return runMatchCommand(argc, argv, first, out, err);
     } catch (const UsageError& e) {
         return fail(EXIT_USAGE, e.what());

@@ -2,7 +2,10 @@
 /// @brief The vdb_match command line: option table, parsing, help, and the subcommands.
 ///
 /// Usage: `vdb_match [match] SOURCE TARGET -o OUTDIR [options]`,
-/// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`, `vdb_match --help`, `--version`.
+/// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`,
+/// `vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]`,
+/// `vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]`,
+/// `vdb_match --help`, `--version`.
 /// Results go to the output stream, progress and errors to the error stream (errors as one line
 /// `vdb_match: error: ...`). See docs/cli.md.
 #pragma once
@@ -61,6 +64,12 @@ std::string helpText();
 /// The grouped option lines of `energy` and of `match`, with their defaults.
 std::string energyOptionHelp();
 std::string matchOptionHelp();
+/// The grouped option lines of `consistency` and of `slice`, with their defaults.
+std::string consistencyOptionHelp();
+std::string sliceOptionHelp();
+
+/// The preview path of a slice channel: OUT.exr -> OUT.<channel>.png.
+std::string slicePreviewPath(const std::string& exrPath, const std::string& channel);
 
 /// The commands, on argv[first..argc): return the exit code; results to @a out, progress to
 /// @a err. They throw UsageError, Interrupted and library exceptions, mapped to exit codes by
@@ -68,6 +77,10 @@ std::string matchOptionHelp();
 int runEnergyCommand(int argc, const char* const* argv, int first, std::ostream& out,
                      std::ostream& err);
 int runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                    std::ostream& err);
+int runConsistencyCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                          std::ostream& err);
+int runSliceCommand(int argc, const char* const* argv, int first, std::ostream& out,
                     std::ostream& err);
 
 /// Runs the command line and returns the exit code. Writes results to @a out and progress and

@@ -1,0 +1,241 @@
+/// @file ConsistencyCommand.cc
+/// @brief `vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2`: the inverse
+///        consistency and matching figures of a pair of deformations (paper tab:inverseError),
+///        as a table or one JSON object (docs/cli.md).
+#include "Cli.h"
+#include "CliSupport.h"
+
+#include <vdbmatch/eval/Consistency.h>
+#include <vdbmatch/io/DeformationField.h>
+#include <vdbmatch/io/ShapeIO.h>
+
+#include <openvdb/openvdb.h>
+#include <tbb/global_control.h>
+
+#include <optional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace vdbmatch {
+namespace cli {
+
+namespace {
+
+struct ConsistencyCliOptions
+{
+    std::string phi, psi, source, target, sourceGrid, targetGrid;
+    int stride = eval::ConsistencyOptions().stride;
+    int distanceLevel = 0;
+    int threads = 0;
+    bool json = false;
+};
+
+std::vector<Option<ConsistencyCliOptions>>
+consistencyOptionTable()
+{
+    using O = ConsistencyCliOptions;
+    // clang-format off
+    return {
+        {"--source", "M1", "Input",
+         "the source shape of PHI (any shape file of match; required)",
+         [](O& o, const std::string& v) { o.source = v; }},
+        {"--target", "M2", "Input",
+         "the target shape of PHI, source of PSI (required)",
+         [](O& o, const std::string& v) { o.target = v; }},
+        {"--source-grid", "NAME", "Input", "grid to read from a .vdb M1 (default: its only float grid)",
+         [](O& o, const std::string& v) { o.sourceGrid = v; }},
+        {"--target-grid", "NAME", "Input", "grid to read from a .vdb M2",
+         [](O& o, const std::string& v) { o.targetGrid = v; }},
+        {"--stride", "N", "Measurement",
+         "sample Omega every N nodes of the finer deformation grid, >= 1 (default 1)",
+         [](O& o, const std::string& v) { o.stride = parseInt("--stride", v); }},
+        {"--distance-level", "L", "Measurement",
+         "level 2^-L of the distance grids of the residuals (default: one finer than the "
+         "deformations, 7..8 in 3D, 9..11 in 2D)",
+         [](O& o, const std::string& v) { o.distanceLevel = parseInt("--distance-level", v); }},
+        {"--json", nullptr, "Output", "print one JSON object instead of the table",
+         [](O& o, const std::string&) { o.json = true; }},
+        {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
+         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+    };
+    // clang-format on
+}
+
+ConsistencyCliOptions
+parseConsistencyOptions(int argc, const char* const* argv, int first)
+{
+    ConsistencyCliOptions o;
+    const std::vector<std::string> positional =
+        parseOptions(consistencyOptionTable(), argc, argv, first, o);
+    if (positional.size() != 2) {
+        throw UsageError("consistency expects PHI.vdb PSI.vdb, got " +
+                         std::to_string(positional.size()) + " file argument(s)");
+    }
+    o.phi = positional[0];
+    o.psi = positional[1];
+    if (o.source.empty() || o.target.empty()) {
+        throw UsageError("consistency needs the shapes: --source M1 --target M2");
+    }
+    if (o.stride < 1) throw UsageError("--stride must be >= 1");
+    if (o.threads < 0) throw UsageError("--threads must be >= 0");
+    if (o.distanceLevel < 0) throw UsageError("--distance-level must be >= 1");
+    return o;
+}
+
+std::string
+domainJson(const eval::DomainError& e, const eval::VertexError& v, double scale)
+{
+    return "{\"omega_l2\": " + jsonNumber(e.l2 * scale) +
+           ", \"omega_linf\": " + jsonNumber(e.linf * scale) +
+           ", \"shape_mean\": " + jsonNumber(v.mean * scale) +
+           ", \"shape_max\": " + jsonNumber(v.max * scale) + "}";
+}
+
+std::string
+inverseJson(const eval::ConsistencyReport& r, const eval::DomainError& e,
+            const eval::VertexError& v)
+{
+    return "{\"world\": " + domainJson(e, v, 1.0) +
+           ", \"relative\": " + domainJson(e, v, 1.0 / r.domainSize) +
+           ", \"omega_points\": " + std::to_string(e.points) +
+           ", \"shape_vertices\": " + std::to_string(v.points) + "}";
+}
+
+std::string
+residualJson(const eval::ConsistencyReport& r, const eval::VertexError& v)
+{
+    return "{\"world\": {\"mean\": " + jsonNumber(v.mean) + ", \"max\": " + jsonNumber(v.max) +
+           "}, \"relative\": {\"mean\": " + jsonNumber(r.relative(v.mean)) +
+           ", \"max\": " + jsonNumber(r.relative(v.max)) +
+           "}, \"vertices\": " + std::to_string(v.points) + "}";
+}
+
+std::string
+detJson(const eval::JacobianStats& s)
+{
+    return "{\"min\": " + jsonNumber(s.min) + ", \"max\": " + jsonNumber(s.max) +
+           ", \"simplices\": " + std::to_string(s.simplices) +
+           ", \"threshold\": " + jsonNumber(eval::DET_LOW_THRESHOLD) +
+           ", \"below_threshold\": " + std::to_string(s.belowThreshold) +
+           ", \"fraction_below_threshold\": " + jsonNumber(s.fractionBelowThreshold()) +
+           ", \"non_positive\": " + std::to_string(s.nonPositive) +
+           ", \"fraction_non_positive\": " + jsonNumber(s.fractionNonPositive()) + "}";
+}
+
+void
+printJson(std::ostream& out, const ConsistencyCliOptions& o, const eval::ConsistencyReport& r)
+{
+    out << "{\n";
+    out << "  \"phi\": " << jsonString(o.phi) << ",\n";
+    out << "  \"psi\": " << jsonString(o.psi) << ",\n";
+    out << "  \"source\": " << jsonString(o.source) << ",\n";
+    out << "  \"target\": " << jsonString(o.target) << ",\n";
+    out << "  \"dimension\": " << r.dim << ",\n";
+    out << "  \"domain_size\": " << jsonNumber(r.domainSize) << ",\n";
+    out << "  \"sample_spacing\": " << jsonNumber(r.sampleSpacing) << ",\n";
+    out << "  \"distance_level\": " << r.distanceLevel << ",\n";
+    out << "  \"distance_voxel\": " << jsonNumber(r.distanceVoxel) << ",\n";
+    out << "  \"psi_phi\": " << inverseJson(r, r.psiPhiDomain, r.psiPhiShape) << ",\n";
+    out << "  \"phi_psi\": " << inverseJson(r, r.phiPsiDomain, r.phiPsiShape) << ",\n";
+    out << "  \"residual_phi\": " << residualJson(r, r.residualPhi) << ",\n";
+    out << "  \"residual_psi\": " << residualJson(r, r.residualPsi) << ",\n";
+    out << "  \"det_phi\": " << detJson(r.detPhi) << ",\n";
+    out << "  \"det_psi\": " << detJson(r.detPsi) << "\n";
+    out << "}\n";
+}
+
+void
+printTable(std::ostream& out, const ConsistencyCliOptions& o, const eval::ConsistencyReport& r)
+{
+    auto row = [&](const std::string& what, double world) {
+        out << "  " << what << std::string(what.size() < 36 ? 36 - what.size() : 1, ' ')
+            << fixed("%11.4e", world) << "   " << fixed("%11.4e", r.relative(world)) << "\n";
+    };
+    auto det = [&](const std::string& name, const eval::JacobianStats& s) {
+        out << "  " << name << ": min " << fixed("%.4g", s.min) << ", max " << fixed("%.4g", s.max)
+            << ", below " << formatNumber(eval::DET_LOW_THRESHOLD) << ": "
+            << fixed("%.3g", 100 * s.fractionBelowThreshold())
+            << "%, <= 0: " << fixed("%.3g", 100 * s.fractionNonPositive()) << "% of " << s.simplices
+            << " simplices\n";
+    };
+    out << "phi: " << o.phi << "\npsi: " << o.psi << "\nM1:  " << o.source << "\nM2:  " << o.target
+        << "\n";
+    out << r.dim << "D, domain size " << formatNumber(r.domainSize)
+        << " (world units), Omega sampled every " << fixed("%.4g", r.sampleSpacing) << " ("
+        << r.psiPhiDomain.points << " points), distances at level " << r.distanceLevel << "\n\n";
+    out << "  " << std::string(36, ' ') << "      world   / domain size\n";
+    row("|psi(phi(x)) - x|  Omega  L2 (rms)", r.psiPhiDomain.l2);
+    row("                   Omega  Linf", r.psiPhiDomain.linf);
+    row("                   M1     mean", r.psiPhiShape.mean);
+    row("                   M1     max", r.psiPhiShape.max);
+    row("|phi(psi(y)) - y|  Omega  L2 (rms)", r.phiPsiDomain.l2);
+    row("                   Omega  Linf", r.phiPsiDomain.linf);
+    row("                   M2     mean", r.phiPsiShape.mean);
+    row("                   M2     max", r.phiPsiShape.max);
+    row("|d2(phi(x))| on M1        mean", r.residualPhi.mean);
+    row("                          max", r.residualPhi.max);
+    row("|d1(psi(y))| on M2        mean", r.residualPsi.mean);
+    row("                          max", r.residualPsi.max);
+    out << "\n";
+    det("det D phi", r.detPhi);
+    det("det D psi", r.detPsi);
+}
+
+Shape
+readShapeInput(const std::string& path, const std::string& gridName, const char* option)
+{
+    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
+        throw UsageError(std::string(option) + " applies to .vdb shapes, not to '" + path + "'");
+    }
+    return readShape(path, gridName);
+}
+
+} // namespace
+
+int
+runConsistencyCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                      std::ostream&)
+{
+    const ConsistencyCliOptions o = parseConsistencyOptions(argc, argv, first);
+    openvdb::initialize();
+    SignalScope signals;
+    std::optional<tbb::global_control> threadLimit;
+    if (o.threads > 0) {
+        threadLimit.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
+    }
+    const DeformationField phi = DeformationField::read(o.phi);
+    const DeformationField psi = DeformationField::read(o.psi);
+    const Shape m1 = readShapeInput(o.source, o.sourceGrid, "--source-grid");
+    const Shape m2 = readShapeInput(o.target, o.targetGrid, "--target-grid");
+    checkInterrupted();
+    if (m1.dim != m2.dim) {
+        OPENVDB_THROW(openvdb::ValueError, "M1 is " + std::to_string(m1.dim) + "D and M2 " +
+                                               std::to_string(m2.dim) + "D");
+    }
+    eval::ConsistencyOptions opts;
+    opts.stride = o.stride;
+    opts.distanceLevel = o.distanceLevel;
+    SignalInterrupter interrupter;
+    const eval::ConsistencyReport report =
+        m1.dim == 2
+            ? eval::measureConsistency<2>(phi, psi, m1.curve, m2.curve, opts, &interrupter)
+            : eval::measureConsistency<3>(phi, psi, m1.surface, m2.surface, opts, &interrupter);
+    checkInterrupted();
+    if (o.json) {
+        printJson(out, o, report);
+    } else {
+        printTable(out, o, report);
+    }
+    out.flush();
+    return EXIT_OK;
+}
+
+std::string
+consistencyOptionHelp()
+{
+    return optionHelp(consistencyOptionTable());
+}
+
+} // namespace cli
+} // namespace vdbmatch

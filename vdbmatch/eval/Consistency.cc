@@ -1,0 +1,347 @@
+/// @file Consistency.cc
+#include "Consistency.h"
+
+#include "ShapeDistance.h"
+
+#include <vdbmatch/geometry/DistanceField.h>
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/thread/Threading.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace vdbmatch {
+namespace eval {
+
+namespace {
+
+using ConstAccessor = openvdb::tree::ValueAccessor<const openvdb::Vec3STree, /*IsSafe=*/false>;
+
+/// Calls func(i) for i in [0, count), in parallel if @a threaded; checks the interrupter once per
+/// range. Returns false if it fired (some i were skipped).
+template <typename Func>
+bool
+forEachChecked(std::size_t count, bool threaded, openvdb::util::NullInterrupter* interrupter,
+               const Func& func)
+{
+    std::atomic<bool> stopped{false};
+    auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+        if (stopped.load(std::memory_order_relaxed)) return;
+        if (interrupter && interrupter->wasInterrupted()) {
+            stopped = true;
+            if (threaded) openvdb::thread::cancelGroupExecution();
+            return;
+        }
+        for (std::size_t i = range.begin(); i != range.end(); ++i)
+            func(i);
+    };
+    if (threaded) {
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count), body);
+    } else {
+        /// Serial ranges of this many items, so the interrupter is still checked now and then.
+        constexpr std::size_t SERIAL_CHUNK = 64;
+        for (std::size_t b = 0; b < count && !stopped; b += SERIAL_CHUNK) {
+            body(tbb::blocked_range<std::size_t>(b, std::min(count, b + SERIAL_CHUNK)));
+        }
+    }
+    return !stopped;
+}
+
+/// A world point of a D-dimensional vertex; 2D points are put in the plane z of the grid.
+template <int D>
+openvdb::Vec3d
+toWorld(const Vec<D>& p, double planeZ)
+{
+    openvdb::Vec3d w(0.0, 0.0, planeZ);
+    for (int a = 0; a < D; ++a)
+        w[a] = p[a];
+    return w;
+}
+
+/// Mean and max of non-negative values, summed in order.
+VertexError
+summarize(const std::vector<double>& values)
+{
+    VertexError e;
+    e.points = values.size();
+    double sum = 0;
+    for (double v : values) {
+        sum += v;
+        e.max = std::max(e.max, v);
+    }
+    e.mean = values.empty() ? 0.0 : sum / double(values.size());
+    return e;
+}
+
+/// |b(a(x)) - x| over the vertices of a shape.
+template <int D>
+bool
+compositionErrorOnShape(const DeformationField& a, const DeformationField& b,
+                        const Surface<D>& shape, bool threaded,
+                        openvdb::util::NullInterrupter* interrupter, VertexError& out)
+{
+    const double planeZ = a.worldBounds().min()[2];
+    std::vector<double> values(shape.points.size(), 0.0);
+    const bool complete = forEachChecked(values.size(), threaded, interrupter, [&](std::size_t i) {
+        const openvdb::Vec3d x = toWorld<D>(shape.points[i], planeZ);
+        values[i] = (b.apply(a.apply(x)) - x).length();
+    });
+    out = summarize(values);
+    return complete;
+}
+
+/// |d(a(x))| over the vertices of a shape.
+template <int D>
+bool
+residualOnShape(const DeformationField& a, const ShapeDistance<D>& d, const Surface<D>& shape,
+                bool threaded, openvdb::util::NullInterrupter* interrupter, VertexError& out)
+{
+    const double planeZ = a.worldBounds().min()[2];
+    std::vector<double> values(shape.points.size(), 0.0);
+    const bool complete = forEachChecked(values.size(), threaded, interrupter, [&](std::size_t i) {
+        values[i] = std::abs(d.signedDistance(a.apply(toWorld<D>(shape.points[i], planeZ))));
+    });
+    out = summarize(values);
+    return complete;
+}
+
+/// Active voxel bounding box of a field's grid.
+openvdb::CoordBBox
+activeBox(const DeformationField& field)
+{
+    openvdb::CoordBBox box;
+    field.grid().tree().evalActiveVoxelBoundingBox(box);
+    return box;
+}
+
+/// Accumulates det over the d! Kuhn simplices of the cell with origin @a o.
+template <int D>
+void
+cellDeterminants(ConstAccessor& acc, const openvdb::Coord& o, double invH, JacobianStats& s)
+{
+    constexpr int CORNERS = 1 << D;
+    std::array<openvdb::Vec3d, CORNERS> u;
+    for (int c = 0; c < CORNERS; ++c) {
+        openvdb::Coord v = o;
+        for (int a = 0; a < D; ++a)
+            v[a] += (c >> a) & 1;
+        u[c] = openvdb::Vec3d(acc.getValue(v));
+    }
+    std::array<int, D> order;
+    for (int a = 0; a < D; ++a)
+        order[a] = a;
+    do {
+        // Path o -> o + e_order[0] -> ...: column order[m] of D phi is e + du / h.
+        double A[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        int mask = 0;
+        for (int m = 0; m < D; ++m) {
+            const int next = mask | (1 << order[m]);
+            const openvdb::Vec3d du = (u[next] - u[mask]) * invH;
+            for (int r = 0; r < D; ++r)
+                A[r][order[m]] += du[r];
+            mask = next;
+        }
+        const double det = D == 2 ? A[0][0] * A[1][1] - A[0][1] * A[1][0]
+                                  : A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
+                                        A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
+                                        A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
+        s.min = std::min(s.min, det);
+        s.max = std::max(s.max, det);
+        ++s.simplices;
+        if (det < DET_LOW_THRESHOLD) ++s.belowThreshold;
+        if (det <= 0) ++s.nonPositive;
+    } while (std::next_permutation(order.begin(), order.end()));
+}
+
+template <int D>
+JacobianStats
+jacobianStatsImpl(const DeformationField& field, bool threaded,
+                  openvdb::util::NullInterrupter* interrupter, bool& complete)
+{
+    const openvdb::CoordBBox box = activeBox(field);
+    const openvdb::Coord lo = box.min(), hi = box.max();
+    const int nx = hi[0] - lo[0], ny = hi[1] - lo[1], nz = D == 3 ? hi[2] - lo[2] : 1;
+    constexpr double INF_DET = std::numeric_limits<double>::infinity();
+    JacobianStats total;
+    if (nx <= 0 || ny <= 0 || nz <= 0) {
+        complete = true;
+        return total;
+    }
+    const double invH = 1.0 / field.voxelSize();
+    // One row of cells per (j, k); rows are combined in order.
+    const std::size_t rows = std::size_t(ny) * std::size_t(nz);
+    std::vector<JacobianStats> perRow(rows);
+    complete = forEachChecked(rows, threaded, interrupter, [&](std::size_t r) {
+        ConstAccessor acc(field.grid().tree());
+        const int j = lo[1] + int(r % std::size_t(ny));
+        const int k = lo[2] + int(r / std::size_t(ny));
+        JacobianStats s;
+        s.min = INF_DET;
+        s.max = -INF_DET;
+        for (int i = lo[0]; i < hi[0]; ++i)
+            cellDeterminants<D>(acc, openvdb::Coord(i, j, k), invH, s);
+        perRow[r] = s;
+    });
+    total.min = INF_DET;
+    total.max = -INF_DET;
+    for (const JacobianStats& s : perRow) {
+        if (!s.simplices) continue;
+        total.min = std::min(total.min, s.min);
+        total.max = std::max(total.max, s.max);
+        total.simplices += s.simplices;
+        total.belowThreshold += s.belowThreshold;
+        total.nonPositive += s.nonPositive;
+    }
+    if (!total.simplices) total.min = total.max = 1;
+    return total;
+}
+
+DomainError
+compositionErrorImpl(const DeformationField& phi, const DeformationField& psi, double spacing,
+                     bool threaded, openvdb::util::NullInterrupter* interrupter, bool& complete)
+{
+    if (!(spacing > 0) || !std::isfinite(spacing)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "compositionErrorOverDomain: the spacing must be positive and finite");
+    }
+    /// Slack on the last point, relative to the spacing (float transforms).
+    constexpr double LAST_POINT_SLACK = 1e-6;
+    const int dim = phi.dimension();
+    const openvdb::BBoxd& bounds = phi.worldBounds();
+    std::array<std::size_t, 3> n{{1, 1, 1}};
+    for (int a = 0; a < dim; ++a) {
+        n[a] = std::size_t(std::floor(bounds.extents()[a] / spacing + LAST_POINT_SLACK)) + 1;
+    }
+    const std::size_t rows = n[1] * n[2];
+    std::vector<double> sum2(rows, 0.0), rowMax(rows, 0.0);
+    complete = forEachChecked(rows, threaded, interrupter, [&](std::size_t r) {
+        const std::size_t j = r % n[1], k = r / n[1];
+        openvdb::Vec3d x = bounds.min();
+        x[1] += double(j) * spacing;
+        if (dim == 3) x[2] += double(k) * spacing;
+        double s = 0, m = 0;
+        for (std::size_t i = 0; i < n[0]; ++i) {
+            x[0] = bounds.min()[0] + double(i) * spacing;
+            const double e = (psi.apply(phi.apply(x)) - x).length();
+            s += e * e;
+            m = std::max(m, e);
+        }
+        sum2[r] = s;
+        rowMax[r] = m;
+    });
+    DomainError out;
+    out.points = rows * n[0];
+    double s = 0;
+    for (std::size_t r = 0; r < rows; ++r) {
+        s += sum2[r];
+        out.linf = std::max(out.linf, rowMax[r]);
+    }
+    out.l2 = std::sqrt(s / double(out.points));
+    return out;
+}
+
+} // namespace
+
+DomainError
+compositionErrorOverDomain(const DeformationField& phi, const DeformationField& psi, double spacing,
+                           bool threaded, openvdb::util::NullInterrupter* interrupter)
+{
+    bool complete = true;
+    return compositionErrorImpl(phi, psi, spacing, threaded, interrupter, complete);
+}
+
+JacobianStats
+jacobianStats(const DeformationField& field, bool threaded,
+              openvdb::util::NullInterrupter* interrupter)
+{
+    bool complete = true;
+    return field.dimension() == 2 ? jacobianStatsImpl<2>(field, threaded, interrupter, complete)
+                                  : jacobianStatsImpl<3>(field, threaded, interrupter, complete);
+}
+
+template <int D>
+ConsistencyReport
+measureConsistency(const DeformationField& phi, const DeformationField& psi, const Surface<D>& m1,
+                   const Surface<D>& m2, const ConsistencyOptions& options,
+                   openvdb::util::NullInterrupter* interrupter)
+{
+    if (phi.dimension() != D || psi.dimension() != D) {
+        OPENVDB_THROW(openvdb::ValueError, "measureConsistency: the deformations are " +
+                                               std::to_string(phi.dimension()) + "D and " +
+                                               std::to_string(psi.dimension()) + "D, the shapes " +
+                                               std::to_string(D) + "D");
+    }
+    if (options.stride < 1) {
+        OPENVDB_THROW(openvdb::ValueError, "measureConsistency: the stride must be >= 1");
+    }
+    checkSurface(m1, "M1 (source)");
+    checkSurface(m2, "M2 (target)");
+    const UnitBoxPlacement omega = domainPlacement(phi);
+    checkShapeInDomain(m1, omega, "M1 (source)");
+    checkShapeInDomain(m2, omega, "M2 (target)");
+
+    ConsistencyReport report;
+    report.dim = D;
+    report.domainSize = domainSize(phi);
+    const int level = std::max(deformationLevel(phi), deformationLevel(psi));
+    report.distanceLevel =
+        options.distanceLevel > 0 ? options.distanceLevel : defaultDistanceLevel(D, level);
+    if (report.distanceLevel < MIN_DISTANCE_LEVEL || report.distanceLevel > MAX_DISTANCE_LEVEL) {
+        OPENVDB_THROW(openvdb::ValueError, "measureConsistency: the distance level must be in [" +
+                                               std::to_string(MIN_DISTANCE_LEVEL) + ", " +
+                                               std::to_string(MAX_DISTANCE_LEVEL) + "]");
+    }
+    report.sampleSpacing = std::min(phi.voxelSize(), psi.voxelSize()) * options.stride;
+
+    auto run = [&](bool ok) {
+        if (!ok) report.interrupted = true;
+        return ok;
+    };
+    const bool threaded = options.threaded;
+    bool complete = true;
+    report.psiPhiDomain =
+        compositionErrorImpl(phi, psi, report.sampleSpacing, threaded, interrupter, complete);
+    if (!run(complete)) return report;
+    report.phiPsiDomain =
+        compositionErrorImpl(psi, phi, report.sampleSpacing, threaded, interrupter, complete);
+    if (!run(complete)) return report;
+    if (!run(compositionErrorOnShape(phi, psi, m1, threaded, interrupter, report.psiPhiShape))) {
+        return report;
+    }
+    if (!run(compositionErrorOnShape(psi, phi, m2, threaded, interrupter, report.phiPsiShape))) {
+        return report;
+    }
+    report.detPhi = jacobianStatsImpl<D>(phi, threaded, interrupter, complete);
+    if (!run(complete)) return report;
+    report.detPsi = jacobianStatsImpl<D>(psi, threaded, interrupter, complete);
+    if (!run(complete)) return report;
+
+    const ShapeDistance<D> d1(m1, omega, report.distanceLevel, threaded);
+    if (interrupter && !run(!interrupter->wasInterrupted())) return report;
+    const ShapeDistance<D> d2(m2, omega, report.distanceLevel, threaded);
+    report.distanceVoxel = d1.voxelSize();
+    if (!run(residualOnShape(phi, d2, m1, threaded, interrupter, report.residualPhi))) {
+        return report;
+    }
+    run(residualOnShape(psi, d1, m2, threaded, interrupter, report.residualPsi));
+    return report;
+}
+
+template ConsistencyReport measureConsistency<2>(const DeformationField&, const DeformationField&,
+                                                 const Surface<2>&, const Surface<2>&,
+                                                 const ConsistencyOptions&,
+                                                 openvdb::util::NullInterrupter*);
+template ConsistencyReport measureConsistency<3>(const DeformationField&, const DeformationField&,
+                                                 const Surface<3>&, const Surface<3>&,
+                                                 const ConsistencyOptions&,
+                                                 openvdb::util::NullInterrupter*);
+
+} // namespace eval
+} // namespace vdbmatch
