@@ -33,6 +33,12 @@ helpText()
     s += wrapHelp("energy SOURCE.vdb TARGET.vdb",
                   "place both level sets in the unit box, resample them at --level and print "
                   "the terms of the matching energy of the identity deformation (phi = Id)");
+    s += wrapHelp("texture PHI.vdb --source M1 -o OUTDIR",
+                  "paint a pattern on M1 and carry it by phi (and psi o phi with --inverse "
+                  "PSI.vdb): coloured PLY meshes (3D) or OBJ curves and deformed grid lines (2D), "
+                  "PNG pictures and summary.png. Options: --target M2, --pattern "
+                  "checker|stripes|position, --bands N, --axis x|y|z, --size PX, --grid-cells N, "
+                  "--quiet (docs/cli.md)");
     s += "\nOptions of match, as --name VALUE or --name=VALUE.\n";
     s += matchOptionHelp();
     s += "\nOptions of energy.\n";
@@ -90,6 +96,7 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
             }
         }
         if (command == "energy") return runEnergyCommand(argc, argv, first, out, err);
+        if (command == "texture") return runTextureCommand(argc, argv, 2, out, err);
         return runMatchCommand(argc, argv, first, out, err);
     } catch (const UsageError& e) {
         return fail(EXIT_USAGE, e.what());
