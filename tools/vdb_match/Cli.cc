@@ -45,6 +45,12 @@ helpText()
                   "sample an axis-aligned plane of the domain into OUT.exr (channels d1, d2, "
                   "displacement, det, residual and, with --inverse, inverse_error; world units) "
                   "and write one PNG preview per channel, OUT.<channel>.png");
+    s += wrapHelp("texture PHI.vdb --source M1 -o OUTDIR",
+                  "paint a pattern on M1 and carry it by phi (and psi o phi with --inverse "
+                  "PSI.vdb): coloured PLY meshes (3D) or OBJ curves and deformed grid lines (2D), "
+                  "PNG pictures and summary.png. Options: --target M2, --pattern "
+                  "checker|stripes|position, --bands N, --axis x|y|z, --size PX, --grid-cells N, "
+                  "--quiet (docs/cli.md)");
     s += "\nOptions of match, as --name VALUE or --name=VALUE.\n";
     s += matchOptionHelp();
     s += "\nOptions of energy.\n";
@@ -111,6 +117,7 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
         if (command == "energy") return runEnergyCommand(argc, argv, first, out, err);
         if (command == "consistency") return runConsistencyCommand(argc, argv, first, out, err);
         if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
+        if (command == "texture") return runTextureCommand(argc, argv, 2, out, err);
         return runMatchCommand(argc, argv, first, out, err);
     } catch (const UsageError& e) {
         return fail(EXIT_USAGE, e.what());

@@ -82,6 +82,8 @@ int runConsistencyCommand(int argc, const char* const* argv, int first, std::ost
                           std::ostream& err);
 int runSliceCommand(int argc, const char* const* argv, int first, std::ostream& out,
                     std::ostream& err);
+int runTextureCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                      std::ostream& err);
 
 /// Runs the command line and returns the exit code. Writes results to @a out and progress and
 /// errors to @a err. Installs SIGINT/SIGTERM handlers for the duration of a command.

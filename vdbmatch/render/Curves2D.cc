@@ -69,6 +69,7 @@ renderCurves2D(const std::vector<ColoredPolyline2D>& curves,
     for (const auto& curve : curves) {
         const size_t n = curve.points.size();
         const size_t segments = curve.closed && n > 2 ? n : (n > 0 ? n - 1 : 0);
+        const double widthPx = curve.widthPx > 0.0 ? curve.widthPx : options.curveWidthPx;
         for (size_t i = 0; i < segments; ++i) {
             const size_t j = (i + 1) % n;
             double ax, ay, bx, by;
@@ -76,7 +77,7 @@ renderCurves2D(const std::vector<ColoredPolyline2D>& curves,
             toPixel(curve.points[j], bx, by);
             const Rgb8 ca = curve.colors.empty() ? BLACK : curve.colors[i];
             const Rgb8 cb = curve.colors.empty() ? BLACK : curve.colors[j];
-            drawSegment(image, ax, ay, bx, by, options.curveWidthPx * ss, ca, cb);
+            drawSegment(image, ax, ay, bx, by, widthPx * ss, ca, cb);
         }
     }
     return ss == 1 ? image : downsample2x(image);

@@ -23,6 +23,7 @@ struct ColoredPolyline2D
     std::vector<openvdb::Vec2d> points;
     std::vector<Rgb8> colors; ///< empty or one per point
     bool closed = true;       ///< join the last point to the first
+    double widthPx = 0.0;     ///< line width, output pixels; <= 0: Curves2DOptions::curveWidthPx
 };
 
 struct Curves2DOptions

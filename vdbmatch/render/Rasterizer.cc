@@ -158,7 +158,20 @@ renderViews(const std::vector<openvdb::Vec3d>& points,
     openvdb::BBoxd box(points.front(), points.front());
     for (const auto& p : points)
         box.expand(p);
+    return renderViews(points, triangles, colors, box, viewSize, options, perspective, labels);
+}
 
+Image8
+renderViews(const std::vector<openvdb::Vec3d>& points,
+            const std::vector<std::array<std::int32_t, 3>>& triangles,
+            const std::vector<Rgb8>& colors, const openvdb::BBoxd& box, int viewSize,
+            const RenderOptions& options, bool perspective, bool labels)
+{
+    if (points.empty()) OPENVDB_THROW(openvdb::ValueError, "renderViews: the mesh has no points");
+    if (viewSize <= 0) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "renderViews: viewSize " + std::to_string(viewSize) + " is not positive");
+    }
     const StandardView views[] = {StandardView::Front, StandardView::Side, StandardView::Top,
                                   StandardView::ThreeQuarter};
     const char* names[] = {"FRONT", "SIDE", "TOP", "3/4"};

@@ -53,4 +53,12 @@ Image8 renderViews(const std::vector<openvdb::Vec3d>& points,
                    const std::vector<Rgb8>& colors, int viewSize, const RenderOptions& options = {},
                    bool perspective = false, bool labels = true);
 
+/// As above, but every view frames @a frame (world) instead of the mesh's bounding box, so that
+/// several meshes (e.g. a shape and its image under a deformation) can be drawn at one scale.
+/// @throw as renderViews(); also if @a frame is empty or not finite (fitCamera)
+Image8 renderViews(const std::vector<openvdb::Vec3d>& points,
+                   const std::vector<std::array<std::int32_t, 3>>& triangles,
+                   const std::vector<Rgb8>& colors, const openvdb::BBoxd& frame, int viewSize,
+                   const RenderOptions& options = {}, bool perspective = false, bool labels = true);
+
 } // namespace vdbmatch
