@@ -136,9 +136,8 @@ def fmt(x):
 
 def columns(c):
     """The four columns of tab:inverseError from the consistency JSON (fractions of the box)."""
-    inv = c["psiPhi"]
-    return (inv["omega"]["l2Fraction"], inv["omega"]["maxFraction"],
-            inv["source"]["meanFraction"], inv["source"]["maxFraction"])
+    rel = c["psi_phi"]["relative"]
+    return (rel["omega_l2"], rel["omega_linf"], rel["shape_mean"], rel["shape_max"])
 
 
 def write_markdown(args, rows, timings, figures, pictures):

@@ -161,7 +161,9 @@ TEST(TransportedTexture, IdentityCurveAndStraightGrid)
         EXPECT_DOUBLE_EQ(line.back()[1 - axis], 1.0);
         for (std::size_t i = 0; i < line.size(); ++i) {
             EXPECT_NEAR(line[i][axis], c, 1e-12);
-            if (i) EXPECT_GT(line[i][1 - axis], line[i - 1][1 - axis]);
+            if (i) {
+                EXPECT_GT(line[i][1 - axis], line[i - 1][1 - axis]);
+            }
             // The images under the identity are the same straight lines.
             EXPECT_LT((t.deformedGrid[l][i] - line[i]).length(), 1e-12);
         }
