@@ -12,7 +12,7 @@ with the table, the pictures (OUTPUT_DIR/results/*.png), the machine and the tim
 Usage:
   tools/run_experiment.py [--quick] [--vdb-match PATH] [--work DIR] [--output FILE] [--force]
 
---quick runs reduced levels (3D 3..5, 2D 4..6) for the test suite; --force recomputes matches
+--quick runs reduced levels (3D 3..4, 2D 4..5) for the test suite; --force recomputes matches
 whose outputs already exist in the work directory (default: reuse them, the runs take minutes).
 Needs the system python (json only); exits non-zero if a command fails.
 """
@@ -30,8 +30,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 PAIRS = [
     # key, label, A, B, full levels, quick levels
-    ("S", "starfish (3D)", "assets/starfish_a.vdb", "assets/starfish_b.vdb", "4..8", "3..5"),
-    ("J", "figure (2D)", "assets/figure_a.polyline", "assets/figure_b.polyline", "4..9", "4..6"),
+    ("S", "starfish (3D)", "assets/starfish_a.vdb", "assets/starfish_b.vdb", "4..8", "3..4"),
+    ("J", "figure (2D)", "assets/figure_a.polyline", "assets/figure_b.polyline", "4..9", "4..5"),
 ]
 ENERGIES = [("dir", "directional"), ("sym", "symmetric")]
 # The paper's tab:inverseError, as printed (fractions of the unit box): L2(Omega), Linf(Omega),

@@ -135,7 +135,7 @@ assert len(r["levels"]) == r["parameters"]["maxLevel"] - r["parameters"]["minLev
 obj = open(out + "/deformed.obj").read()
 assert obj.count("\nv ") > 100
 PY
-ls "$SCRATCH/m3" | grep -q tmp && fail "temporary files left in the output directory"
+ls -A "$SCRATCH/m3" | grep -q "\.tmp" && fail "temporary files left in the output directory"
 
 # ---------------------------------------------------------------- 2D end to end (0)
 if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then

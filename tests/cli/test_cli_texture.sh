@@ -164,7 +164,7 @@ if pngs_nonblank "$SCRATCH"/tex3/{source,deformed,roundtrip,target,summary}.png 
 else
     fail "texture-3d outputs"
 fi
-ls "$SCRATCH/tex3" "$SCRATCH/tex2" | grep -q tmp && fail "temporary files left in the output directory"
+cat <(ls -A "$SCRATCH/tex3") <(ls -A "$SCRATCH/tex2") | grep -q "\.tmp" && fail "temporary files left in the output directory"
 
 echo "$((count - failures))/$count passed"
 [ "$failures" -eq 0 ]
