@@ -13,40 +13,8 @@ ELLIPSOID="$ASSETS/ellipsoid.vdb"
 SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli.XXXXXX")
 trap 'rm -rf "$SCRATCH"' EXIT
 
-failures=0
-count=0
+source "$(dirname "$0")/common.sh"
 
-# check NAME EXPECTED_CODE STDOUT_PATTERN STDERR_PATTERN -- ARGS...
-# Patterns are extended regular expressions ('' = no check). A failing command must print exactly
-# one line on stderr, starting with "vdb_match: error: ".
-check() {
-    local name=$1 expected=$2 outPattern=$3 errPattern=$4
-    shift 5
-    count=$((count + 1))
-    "$VDB_MATCH" "$@" >"$SCRATCH/out" 2>"$SCRATCH/err"
-    local code=$?
-    local problem=""
-    if [ "$code" -ne "$expected" ]; then
-        problem="exit code $code, expected $expected"
-    elif [ -n "$outPattern" ] && ! grep -Eq -- "$outPattern" "$SCRATCH/out"; then
-        problem="stdout does not match /$outPattern/"
-    elif [ -n "$errPattern" ] && ! grep -Eq -- "$errPattern" "$SCRATCH/err"; then
-        problem="stderr does not match /$errPattern/"
-    elif [ "$expected" -ne 0 ]; then
-        if [ "$(wc -l <"$SCRATCH/err")" -ne 1 ] || ! grep -q '^vdb_match: error: ' "$SCRATCH/err"; then
-            problem="stderr is not one 'vdb_match: error: ' line"
-        fi
-    fi
-    if [ -n "$problem" ]; then
-        failures=$((failures + 1))
-        echo "FAIL $name: $problem"
-        echo "  command: vdb_match $*"
-        sed 's/^/  stdout: /' "$SCRATCH/out" | head -20
-        sed 's/^/  stderr: /' "$SCRATCH/err" | head -20
-    else
-        echo "ok   $name"
-    fi
-}
 
 # ---------------------------------------------------------------- invalid inputs
 PYTHON=""

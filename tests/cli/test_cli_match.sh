@@ -14,41 +14,8 @@ FIGURE_B="$ASSETS/figure_b.polyline"
 SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli-match.XXXXXX")
 trap 'rm -rf "$SCRATCH"' EXIT
 
-failures=0
-count=0
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL $1"
-}
+source "$(dirname "$0")/common.sh"
 
-# check NAME EXPECTED_CODE STDOUT_PATTERN STDERR_PATTERN -- ARGS...  (as in test_cli.sh)
-check() {
-    local name=$1 expected=$2 outPattern=$3 errPattern=$4
-    shift 5
-    count=$((count + 1))
-    "$VDB_MATCH" "$@" >"$SCRATCH/out" 2>"$SCRATCH/err"
-    local code=$?
-    local problem=""
-    if [ "$code" -ne "$expected" ]; then
-        problem="exit code $code, expected $expected"
-    elif [ -n "$outPattern" ] && ! grep -Eq -- "$outPattern" "$SCRATCH/out"; then
-        problem="stdout does not match /$outPattern/"
-    elif [ -n "$errPattern" ] && ! grep -Eq -- "$errPattern" "$SCRATCH/err"; then
-        problem="stderr does not match /$errPattern/"
-    elif [ "$expected" -ne 0 ] && [ "$expected" -ne 5 ]; then
-        if [ "$(wc -l <"$SCRATCH/err")" -ne 1 ] || ! grep -q '^vdb_match: error: ' "$SCRATCH/err"; then
-            problem="stderr is not one 'vdb_match: error: ' line"
-        fi
-    fi
-    if [ -n "$problem" ]; then
-        fail "$name: $problem"
-        echo "  command: vdb_match $*"
-        sed 's/^/  stdout: /' "$SCRATCH/out" | head -20
-        sed 's/^/  stderr: /' "$SCRATCH/err" | tail -20
-    else
-        echo "ok   $name"
-    fi
-}
 
 PYTHON=""
 for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do

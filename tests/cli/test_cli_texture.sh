@@ -17,41 +17,8 @@ trap 'rm -rf "$SCRATCH"' EXIT
 PYTHON=/usr/bin/python3
 command -v "$PYTHON" >/dev/null 2>&1 || PYTHON=python3
 
-failures=0
-count=0
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL $1"
-}
+source "$(dirname "$0")/common.sh"
 
-# check NAME EXPECTED_CODE STDOUT_PATTERN STDERR_PATTERN -- ARGS...  (as in test_cli.sh)
-check() {
-    local name=$1 expected=$2 outPattern=$3 errPattern=$4
-    shift 5
-    count=$((count + 1))
-    "$VDB_MATCH" "$@" >"$SCRATCH/out" 2>"$SCRATCH/err"
-    local code=$?
-    local problem=""
-    if [ "$code" -ne "$expected" ]; then
-        problem="exit code $code, expected $expected"
-    elif [ -n "$outPattern" ] && ! grep -Eq -- "$outPattern" "$SCRATCH/out"; then
-        problem="stdout does not match /$outPattern/"
-    elif [ -n "$errPattern" ] && ! grep -Eq -- "$errPattern" "$SCRATCH/err"; then
-        problem="stderr does not match /$errPattern/"
-    elif [ "$expected" -ne 0 ]; then
-        if [ "$(wc -l <"$SCRATCH/err")" -ne 1 ] || ! grep -q '^vdb_match: error: ' "$SCRATCH/err"; then
-            problem="stderr is not one 'vdb_match: error: ' line"
-        fi
-    fi
-    if [ -n "$problem" ]; then
-        fail "$name: $problem"
-        echo "  command: vdb_match $*"
-        sed 's/^/  stdout: /' "$SCRATCH/out" | head -20
-        sed 's/^/  stderr: /' "$SCRATCH/err" | tail -20
-    else
-        echo "ok   $name"
-    fi
-}
 
 # pngs_nonblank FILE...: each is a PNG with several colours and a visible share of non-white
 # pixels (decoded with the standard library: zlib and the PNG row filters).
