@@ -15,6 +15,17 @@ namespace cli {
 const char* const PROGRAM = "vdb_match";
 
 std::string
+commandLine(int argc, const char* const* argv)
+{
+    std::string line;
+    for (int i = 0; i < argc; ++i) {
+        if (i) line += ' ';
+        line += argv[i];
+    }
+    return line;
+}
+
+std::string
 formatNumber(double x)
 {
     std::ostringstream s;

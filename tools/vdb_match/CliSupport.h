@@ -34,7 +34,7 @@ template <typename T> struct Option
 };
 
 /// Applies the options of argv[first..argc) to @a o and returns the positional arguments.
-/// `--` ends the options.
+/// `--` ends the options; `-o` is short for `--output` (in tables that have it).
 /// @throw UsageError on an unknown option or a missing or unexpected value
 template <typename T>
 std::vector<std::string>
@@ -54,7 +54,7 @@ parseOptions(const std::vector<Option<T>>& table, int argc, const char* const* a
             continue;
         }
         const size_t eq = arg.find('=');
-        const std::string name = arg.substr(0, eq);
+        const std::string name = arg == "-o" ? std::string("--output") : arg.substr(0, eq);
         const Option<T>* opt = nullptr;
         for (const Option<T>& candidate : table) {
             if (name == candidate.name) opt = &candidate;
@@ -77,6 +77,9 @@ parseOptions(const std::vector<Option<T>>& table, int argc, const char* const* a
 
 /// The help lines of an option table, grouped.
 template <typename T> std::string optionHelp(const std::vector<Option<T>>& table);
+
+/// The command line as typed: argv joined by spaces.
+std::string commandLine(int argc, const char* const* argv);
 
 /// Parses a finite number / an integer for option @a option.
 /// @throw UsageError if @a text is not one

@@ -190,23 +190,10 @@ matchOptionTable()
 MatchCliOptions
 parseMatchOptions(int argc, const char* const* argv, int first)
 {
-    // -o is the only short option: rewrite it to --output.
-    std::vector<std::string> args;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        args.push_back(i >= first && a == "-o" ? "--output" : a);
-    }
-    std::vector<const char*> rewritten;
-    for (const std::string& a : args)
-        rewritten.push_back(a.c_str());
-
     MatchCliOptions o;
-    for (int i = 0; i < argc; ++i) {
-        if (i) o.commandLine += ' ';
-        o.commandLine += argv[i];
-    }
+    o.commandLine = commandLine(argc, argv);
     const std::vector<std::string> positional =
-        parseOptions(matchOptionTable(), argc, rewritten.data(), first, o);
+        parseOptions(matchOptionTable(), argc, argv, first, o);
     if (positional.size() != 2) {
         throw UsageError("expected SOURCE TARGET, got " + std::to_string(positional.size()) +
                          " file argument(s) (see vdb_match --help)");

@@ -105,21 +105,10 @@ endsWithExr(const std::string& path)
 SliceCliOptions
 parseSliceOptions(int argc, const char* const* argv, int first)
 {
-    std::vector<std::string> args;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        args.push_back(i >= first && a == "-o" ? "--output" : a);
-    }
-    std::vector<const char*> rewritten;
-    for (const std::string& a : args)
-        rewritten.push_back(a.c_str());
     SliceCliOptions o;
-    for (int i = 0; i < argc; ++i) {
-        if (i) o.commandLine += ' ';
-        o.commandLine += argv[i];
-    }
+    o.commandLine = commandLine(argc, argv);
     const std::vector<std::string> positional =
-        parseOptions(sliceOptionTable(), argc, rewritten.data(), first, o);
+        parseOptions(sliceOptionTable(), argc, argv, first, o);
     if (positional.size() != 1) {
         throw UsageError("slice expects one deformation PHI.vdb, got " +
                          std::to_string(positional.size()) + " file argument(s)");

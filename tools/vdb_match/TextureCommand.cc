@@ -113,17 +113,9 @@ constexpr int MAX_GRID_CELLS = 512;
 TextureCliOptions
 parseTextureOptions(int argc, const char* const* argv, int first)
 {
-    std::vector<std::string> args;
-    for (int i = 0; i < argc; ++i) {
-        const std::string a = argv[i];
-        args.push_back(i >= first && a == "-o" ? "--output" : a);
-    }
-    std::vector<const char*> rewritten;
-    for (const std::string& a : args)
-        rewritten.push_back(a.c_str());
     TextureCliOptions o;
     const std::vector<std::string> positional =
-        parseOptions(textureOptionTable(), argc, rewritten.data(), first, o);
+        parseOptions(textureOptionTable(), argc, argv, first, o);
     if (positional.size() != 1) {
         throw UsageError("texture expects PHI.vdb, got " + std::to_string(positional.size()) +
                          " file argument(s) (see vdb_match --help)");

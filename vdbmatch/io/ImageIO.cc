@@ -2,6 +2,8 @@
 /// @brief EXR and PNG writing through OpenImageIO, with atomic rename; image reading.
 #include "ImageIO.h"
 
+#include <vdbmatch/io/AtomicFile.h>
+
 #include <OpenImageIO/imageio.h>
 #include <openvdb/Exceptions.h>
 
@@ -32,46 +34,29 @@ quoted(const std::string& s)
     return "'" + s + "'";
 }
 
-/// Writes @a spec / @a data with OpenImageIO's writer for @a format ("openexr", "png") to a
-/// temporary file next to @a path, flushes it and renames it over @a path.
+/// Writes @a spec / @a data with OpenImageIO's writer for @a format ("openexr", "png") to
+/// @a path atomically (writeFileAtomicallyVia: temporary file, flush, rename).
 void
 writeAtomically(const std::string& function, const std::string& path, const std::string& format,
                 const OIIO::ImageSpec& spec, OIIO::TypeDesc dataType, const void* data)
 {
-    static std::atomic<unsigned> sCounter{0};
-    const fs::path target(path);
-    if (target.filename().empty()) {
-        OPENVDB_THROW(openvdb::IoError, function + ": " + quoted(path) + " is not a file name");
-    }
-    const fs::path temp =
-        target.parent_path() / ("." + target.filename().string() + ".tmp" +
-                                std::to_string(::getpid()) + "-" + std::to_string(sCounter++));
-    auto fail = [&](const std::string& what) {
-        std::error_code ignored;
-        fs::remove(temp, ignored);
-        OPENVDB_THROW(openvdb::IoError, function + ": cannot write " + quoted(path) + ": " + what);
-    };
-
-    std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(format);
-    if (!out) fail("OpenImageIO has no " + format + " writer (" + OIIO::geterror() + ")");
-    if (!out->open(temp.string(), spec)) fail(out->geterror());
-    if (!out->write_image(dataType, data)) {
-        const std::string error = out->geterror();
-        out->close();
-        fail(error);
-    }
-    if (!out->close()) fail(out->geterror());
-    out.reset();
-
-    // Flush to disk before the rename, so that a crash leaves the old file or the new one.
-    const int fd = ::open(temp.c_str(), O_RDONLY);
-    if (fd < 0) fail("the temporary file " + quoted(temp.string()) + " was not created");
-    const bool synced = ::fsync(fd) == 0;
-    ::close(fd);
-    if (!synced) fail("cannot flush " + quoted(temp.string()) + " to disk");
-    std::error_code ec;
-    fs::rename(temp, target, ec);
-    if (ec) fail("cannot rename the temporary file (" + ec.message() + ")");
+    writeFileAtomicallyVia(
+        path,
+        [&](const std::string& temp) {
+            std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(format);
+            if (!out) {
+                throw std::runtime_error("OpenImageIO has no " + format + " writer (" +
+                                         OIIO::geterror() + ")");
+            }
+            if (!out->open(temp, spec)) throw std::runtime_error(out->geterror());
+            if (!out->write_image(dataType, data)) {
+                const std::string error = out->geterror();
+                out->close();
+                throw std::runtime_error(error);
+            }
+            if (!out->close()) throw std::runtime_error(out->geterror());
+        },
+        function);
 }
 
 } // namespace
