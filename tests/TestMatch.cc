@@ -8,6 +8,7 @@
 #include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -211,4 +212,21 @@ TEST(Match, InvalidOptionsThrow)
     opts = MatchOptions::defaults(2);
     opts.refinementMarginCells = -1;
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
+TEST(Match, LipschitzBoundIsTheLargestSingularValue)
+{
+    // phi = Id: 1 (the Frobenius norm would give sqrt(d)); phi = Id + u with u linear, D phi = A
+    // on every simplex: the largest singular value of A.
+    const auto lattice = SimplexLattice<3>::dense(3);
+    NodeVectors<3> u = NodeVectors<3>::Zero(3, lattice.nodeCount());
+    EXPECT_NEAR(lipschitzBound<3>(lattice, u), 1.0, 1e-12);
+    Mat<3> A;
+    A << 1.3, 0.2, 0.0, -0.1, 0.9, 0.05, 0.0, 0.1, 1.1;
+    for (std::size_t i = 0; i < lattice.nodeCount(); ++i) {
+        const Vec<3> x = lattice.nodePosition(i);
+        u.col(i) = A * x - x;
+    }
+    const Eigen::JacobiSVD<Mat<3>> svd(A);
+    EXPECT_NEAR(lipschitzBound<3>(lattice, u), svd.singularValues()[0], 1e-10);
 }

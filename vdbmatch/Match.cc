@@ -4,6 +4,7 @@
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
+#include <Eigen/Eigenvalues>
 #include <openvdb/Exceptions.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -156,7 +157,10 @@ lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
                         const auto to = cell.corners[paths[p][m]];
                         A.col(a) += (u.col(to) - u.col(from)) / side;
                     }
-                    best = std::max(best, A.norm());
+                    // Largest singular value: sqrt of the largest eigenvalue of A^T A.
+                    Eigen::SelfAdjointEigenSolver<Mat<D>> eig;
+                    eig.computeDirect(A.transpose() * A, Eigen::EigenvaluesOnly);
+                    best = std::max(best, std::sqrt(std::max(Real(0), eig.eigenvalues()[D - 1])));
                 }
             }
             return best;
@@ -203,8 +207,12 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             summary.fieldSeconds = secondsSince(t0);
 
             t0 = Clock::now();
+            // A band term lives on a simplex whose centroid x has |d1(x)| < sigma (direct half;
+            // d1 does not depend on phi, so this region is exact) or |d2(phi(x))| < sigma
+            // (inverse half; phi moves during the level, hence the margin).
             const Real sigma = opts.multiscale.energy.sigmaFactor * h;
-            const Real reach = sigma + (opts.refinementMarginCells + std::sqrt(Real(D)) / 2) * h;
+            const Real reach1 = sigma;
+            const Real reach2 = sigma + opts.refinementMarginCells * h;
             std::unique_ptr<multiscale::PiecewiseLinearInterpolator<D>> previous;
             Real lipschitz = 1;
             if (context.previousLattice) {
@@ -218,7 +226,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             const NodeVectors<D>* uPrev = context.previousDisplacement;
             const RefinementPredicate<D> needsFine = [&](const Vec<D>& c, Real radius) {
                 Real d;
-                if (!d1.sampleDistance(c, d) || std::abs(d) < reach + radius + tierSlack(d1, c)) {
+                if (!d1.sampleDistance(c, d) || std::abs(d) < reach1 + radius + tierSlack(d1, c)) {
                     return true;
                 }
                 Vec<D> y = c;
@@ -227,7 +235,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                     if (previous->evaluate(*uPrev, c, du)) y += du;
                 }
                 return !d2.sampleDistance(y, d) ||
-                       std::abs(d) < reach + lipschitz * radius + tierSlack(d2, y);
+                       std::abs(d) < reach2 + lipschitz * radius + tierSlack(d2, y);
             };
             level.lattice = std::make_shared<SimplexLattice<D>>(
                 buildAdaptiveLattice<D>(l, std::max(0, l - coarsestLevel), needsFine,

@@ -150,7 +150,7 @@ MatchResult<D> match(const Surface<D>& source, const Surface<D>& target,
 template <int D> LatticeSummary summarize(const SimplexLattice<D>& lattice);
 
 /// The Lipschitz constant of phi = Id + u on a lattice: the largest spectral norm of D phi over
-/// the simplices (bounded above by the Frobenius norm, which is what is returned).
+/// the simplices (at least 1).
 template <int D> Real lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u);
 
 extern template MatchResult<2> match<2>(const Surface<2>&, const Surface<2>&,

@@ -163,3 +163,59 @@ TEST(Energy, RejectsBadInput)
                          EnergyParameters::defaults(3), EnergyKind::Symmetric);
     EXPECT_THROW(P.energy->value(NodeVectors<3>::Zero(3, 5)), openvdb::ValueError);
 }
+
+namespace {
+
+/// The cell culling of the inverse band (Energy::setCellCulling) changes nothing: value,
+/// terms, band counts and gradient are bitwise those of the unculled assembly, for
+/// displacements from a fraction of a cell to several cells.
+template <int D>
+void
+checkCullingIsExact(int level)
+{
+    MatchingProblem<D> P(level, sourceSdf<D>(level), targetSdf<D>(level),
+                         EnergyParameters::defaults(D), EnergyKind::Symmetric);
+    const Real h = P.lattice->h();
+    for (Real amplitude : {0.3 * h, 1.0 * h, 3.0 * h}) {
+        // Random up to a cell; beyond, a smooth bump (no noise, which would invert simplices).
+        NodeVectors<D> u = P.randomDisplacement(7, std::min(amplitude, h));
+        if (amplitude > h) {
+            for (std::size_t i = 0; i < P.lattice->nodeCount(); ++i) {
+                const Vec<D> x = P.lattice->nodePosition(i);
+                Real bump = amplitude;
+                for (int a = 0; a < D; ++a)
+                    bump *= std::sin(M_PI * x[a]);
+                u.col(i) = bump * Vec<D>::Ones();
+            }
+        }
+        EnergyTerms culled, full;
+        NodeVectors<D> gCulled, gFull;
+        P.energy->setCellCulling(true);
+        const Real eCulled = P.energy->valueAndGradient(u, gCulled, &culled);
+        P.energy->setCellCulling(false);
+        const Real eFull = P.energy->valueAndGradient(u, gFull, &full);
+        P.energy->setCellCulling(true);
+        ASSERT_TRUE(std::isfinite(eFull)) << "amplitude " << amplitude / h << " h";
+        EXPECT_EQ(eCulled, eFull);
+        EXPECT_EQ(culled.bandSimplices, full.bandSimplices);
+        EXPECT_GT(full.bandSimplices, 0u);
+        for (int k = 0; k < 2; ++k) {
+            EXPECT_EQ(culled.match[k], full.match[k]);
+            EXPECT_EQ(culled.mem[k], full.mem[k]);
+            EXPECT_EQ(culled.bend[k], full.bend[k]);
+            EXPECT_EQ(culled.vol[k], full.vol[k]);
+        }
+        EXPECT_EQ((gCulled - gFull).cwiseAbs().maxCoeff(), 0.0);
+    }
+}
+
+} // namespace
+
+TEST(Energy, CellCullingIsExact3D)
+{
+    checkCullingIsExact<3>(4);
+}
+TEST(Energy, CellCullingIsExact2D)
+{
+    checkCullingIsExact<2>(6);
+}

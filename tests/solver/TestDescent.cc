@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <vector>
 
@@ -465,4 +466,56 @@ TEST(ArmijoLineSearch, FailureOutcomes)
     r = armijoBacktrack(cancelled, 0.0, -1.0, 1.0, 1.0, ArmijoOptions{}, &interrupter);
     EXPECT_EQ(r.status, LineSearchStatus::Interrupted);
     EXPECT_THROW(ArmijoLineSearch<2>(ArmijoOptions{2.0}), openvdb::ValueError);
+}
+
+TEST(Descent, SettleTestEndsALevelOnRelativeProgress)
+{
+    // The settle test (DescentOptions::settleTolerance) ends the run when the last w iterations
+    // gained less than a fraction of what the run gained so far. Checked against the energy
+    // history the observer sees, and a tighter tolerance runs longer to a lower energy.
+    const EnergyParameters params = EnergyParameters::defaults(2);
+    Problem<2> problem(params);
+    const auto lattice = SimplexLattice<2>::dense(5);
+    const Energy<2> energy(lattice, *problem.shape1, *problem.shape2, params,
+                           EnergyKind::Symmetric);
+    const H1Metric<2> metric(lattice, DEFAULT_METRIC_TAU_FACTOR * energy.sigma() * energy.sigma());
+    Report reports[2];
+    for (int k = 0; k < 2; ++k) {
+        DescentOptions opts;
+        opts.energyTolerance = 0;
+        opts.relativeGradientTolerance = 0;
+        opts.settleTolerance = k == 0 ? 3e-2 : 3e-3;
+        std::vector<Real> history;
+        const Descent<2> descent(energy, metric, opts);
+        NodeVectors<2> u = NodeVectors<2>::Zero(2, lattice.nodeCount());
+        reports[k] = descent.run(u, [&](const IterationInfo& i) { history.push_back(i.energy); });
+        const Report& r = reports[k];
+        ASSERT_EQ(r.status, Status::Converged);
+        EXPECT_EQ(r.convergedBy, ConvergenceTest::Settled);
+        const std::size_t w = std::size_t(opts.energyWindow);
+        ASSERT_EQ(history.size(), std::size_t(r.iterations) + 1);
+        ASSERT_GT(history.size(), w);
+        // The test holds at the last iteration and at no earlier one.
+        auto settled = [&](std::size_t k) {
+            return history[k - w] - history[k] <= opts.settleTolerance * (history[0] - history[k]);
+        };
+        EXPECT_TRUE(settled(history.size() - 1));
+        for (std::size_t j = w; j + 1 < history.size(); ++j)
+            EXPECT_FALSE(settled(j)) << "iteration " << j;
+    }
+    EXPECT_GT(reports[1].iterations, reports[0].iterations);
+    EXPECT_LT(reports[1].energy, reports[0].energy);
+    EXPECT_STREQ(toString(ConvergenceTest::Settled), "settled");
+}
+
+TEST(Descent, RejectsInvalidSettleTolerance)
+{
+    DescentOptions opts;
+    opts.settleTolerance = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.settleTolerance = std::numeric_limits<Real>::infinity();
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    MultiscaleOptions m = MultiscaleOptions::defaults(2);
+    m.settleCoarsening = 0.5;
+    EXPECT_THROW(m.validate(), openvdb::ValueError);
 }

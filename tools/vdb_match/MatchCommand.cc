@@ -48,6 +48,8 @@ struct MatchCliOptions
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
+    double settleTolerance = MatchOptions::defaults(3).multiscale.descent.settleTolerance;
+    double settleCoarsening = MatchOptions::defaults(3).multiscale.settleCoarsening;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
@@ -147,6 +149,14 @@ matchOptionTable()
          "a level has converged when the energy fell by less than X (relative) over 5 "
          "iterations (default " + formatNumber(d.energyTolerance) + ")",
          [](O& o, const std::string& v) { o.energyTolerance = parseDouble("--energy-tolerance", v); }},
+        {"--settle-tolerance", "X", "Descent",
+         "a level has converged when its last 5 iterations lowered the energy by less than X "
+         "times what the level has lowered it so far (default " + formatNumber(d.settleTolerance) + ")",
+         [](O& o, const std::string& v) { o.settleTolerance = parseDouble("--settle-tolerance", v); }},
+        {"--settle-coarsening", "F", "Descent",
+         "level l uses the settle tolerance divided by F^(last level - l): coarse levels, where "
+         "iterations are cheap, converge further (default " + formatNumber(d.settleCoarsening) + ")",
+         [](O& o, const std::string& v) { o.settleCoarsening = parseDouble("--settle-coarsening", v); }},
         {"--gradient-tolerance", "X", "Descent",
          "... or when the H1 gradient norm fell below X times its initial value (default " +
              formatNumber(d.gradientTolerance) + ")",
@@ -407,6 +417,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
       << ", \"metricTolerance\": " << jsonNumber(opts.multiscale.metric.cgTolerance)
       << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
       << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
+      << ", \"settleTolerance\": " << jsonNumber(opts.multiscale.descent.settleTolerance)
+      << ", \"settleCoarsening\": " << jsonNumber(opts.multiscale.settleCoarsening)
       << ", \"relativeGradientTolerance\": "
       << jsonNumber(opts.multiscale.descent.relativeGradientTolerance) << "},\n";
     s << "  \"levels\": [";
@@ -436,6 +448,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
           << ", \"energy\": " << jsonNumber(rep.energy) << ", \"terms\": " << termsJson(rep.terms)
           << ", \"gradNorm\": " << jsonNumber(rep.gradNorm)
           << ", \"minJacobian\": " << jsonNumber(rep.minJacobian)
+          << ", \"bandSimplices\": " << rep.terms.bandSimplices
+          << ", \"coarseBandSimplices\": " << rep.terms.coarseBandSimplices
           << ", \"seconds\": {\"fields\": " << jsonNumber(l.fieldSeconds)
           << ", \"lattice\": " << jsonNumber(l.latticeSeconds)
           << ", \"descent\": " << jsonNumber(rep.elapsedSeconds) << "}}";
@@ -490,6 +504,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.method = o.method;
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
+    opts.multiscale.descent.settleTolerance = o.settleTolerance;
+    opts.multiscale.settleCoarsening = o.settleCoarsening;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;

@@ -35,6 +35,7 @@ EnergyTerms::operator+=(const EnergyTerms& o)
     }
     invertedSimplices += o.invertedSimplices;
     bandSimplices += o.bandSimplices;
+    coarseBandSimplices += o.coarseBandSimplices;
     return *this;
 }
 
@@ -183,6 +184,33 @@ Energy<D>::sourceFrame(std::size_t simplex, const Vec<D>& x, kinematics::Surface
 }
 
 template <int D>
+bool
+Energy<D>::cellMayReachBand2(const Vec<D>& origin, Real side,
+                             const std::array<Vec<D>, SimplexLattice<D>::CORNERS>& uc) const
+{
+    constexpr int NC = SimplexLattice<D>::CORNERS;
+    if (!mCullCells) return true;
+    // The deformed corners y_k and their mean: every deformed centroid y_T of the cell is a
+    // convex combination of the y_k, so |y_T - ybar| <= R = max_k |y_k - ybar|.
+    std::array<Vec<D>, NC> y;
+    Vec<D> ybar = Vec<D>::Zero();
+    for (int k = 0; k < NC; ++k) {
+        for (int a = 0; a < D; ++a)
+            y[k][a] = origin[a] + ((k >> a) & 1 ? side : 0.0) + uc[k][a];
+        ybar += y[k];
+    }
+    ybar /= Real(NC);
+    Real R2 = 0;
+    for (int k = 0; k < NC; ++k)
+        R2 = std::max(R2, (y[k] - ybar).squaredNorm());
+    Real d2, voxel;
+    if (!mShape2->sampleDistance(ybar, d2, &voxel)) return true;
+    // The true distance is 1-Lipschitz and each interpolated tier is within a fraction of its
+    // voxel of it, so |d2(y_T)| >= |d2(ybar)| - R - CULL_SLACK_VOXELS * voxel.
+    return std::abs(d2) < mSigma + std::sqrt(R2) + CULL_SLACK_VOXELS * voxel;
+}
+
+template <int D>
 template <bool Grad>
 void
 Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& t,
@@ -203,15 +231,30 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
     PointGeometry<D> g;
     RawFields<D> raw2;
     RawFieldDerivatives<D> deriv2;
+    // Centroid of simplex p of a cell: origin + side * centroidOffset[p] (the same as centroid()).
+    std::array<Vec<D>, SimplexLattice<D>::SIMPLICES> centroidOffset;
+    for (std::size_t p = 0; p < paths.size(); ++p) {
+        centroidOffset[p].setZero();
+        for (int m = 0; m <= D; ++m)
+            for (int a = 0; a < D; ++a)
+                if (paths[p][m] & (1 << a)) centroidOffset[p][a] += 1.0;
+        centroidOffset[p] /= Real(D + 1);
+    }
 
     for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
         const auto& cell = L.cells()[ci];
         const Real side = h * Real(1 << cell.log2Size);
         const Real invSide = 1.0 / side;
-        const Real volume = INV_FACTORIAL * std::pow(side, D);
+        Real volume = INV_FACTORIAL;
+        for (int a = 0; a < D; ++a)
+            volume *= side;
+        Vec<D> origin;
+        for (int a = 0; a < D; ++a)
+            origin[a] = cell.origin[a] * h;
         for (int k = 0; k < NC; ++k)
             uc[k] = u.col(cell.corners[k]);
         const int32_t* slots = L.cellSlots().data() + ci * NC;
+        const bool mayReachBand2 = symmetric && cellMayReachBand2(origin, side, uc);
 
         for (std::size_t p = 0; p < paths.size(); ++p) {
             const auto& path = paths[p];
@@ -224,7 +267,7 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
                 if (m > 0) A.col(axis[m]) += (uc[path[m]] - uc[path[m - 1]]) * invSide;
             }
             const std::size_t simplex = ci * paths.size() + p;
-            const Vec<D> x = centroid(ci, p);
+            const Vec<D> x = origin + side * centroidOffset[p];
             const Vec<D> y = x + ubar / Real(D + 1);
 
             const SimplexKinematics<D> k(A);
@@ -249,7 +292,7 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
             g.eta2 = 0;
             g.eta2Derivative = 0;
             bool inBand2 = false;
-            if (symmetric && !inBand1) {
+            if (mayReachBand2 && !inBand1) {
                 Real d2;
                 if (!mShape2->sampleDistance(y, d2)) throwOutside("shape 2", y.data(), D);
                 inBand2 = band.inBand(d2);
@@ -257,6 +300,7 @@ Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, Energy
             Vec<D> dy = Vec<D>::Zero();
             if (inBand1 || inBand2) {
                 ++t.bandSimplices;
+                if (cell.log2Size > 0) ++t.coarseBandSimplices;
                 if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
                     throwOutside("shape 2", y.data(), D);
                 kinematics::makeFrame(raw2, g.f2);

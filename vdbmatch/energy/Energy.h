@@ -24,6 +24,7 @@
 
 #include <openvdb/util/NullInterrupter.h>
 
+#include <array>
 #include <cstddef>
 #include <vector>
 
@@ -40,6 +41,9 @@ struct EnergyTerms
     Real vol[2] = {0, 0};
     std::size_t invertedSimplices = 0; ///< simplices with det D phi <= 0 (energy +inf)
     std::size_t bandSimplices = 0;     ///< simplices where a band term was evaluated
+    /// ... of which in cells larger than h: the band reached beyond the fine region of an
+    /// adaptive lattice (Match.h), where it is resolved more coarsely.
+    std::size_t coarseBandSimplices = 0;
 
     Real total() const;
     EnergyTerms& operator+=(const EnergyTerms& o);
@@ -76,6 +80,13 @@ public:
     /// Smallest det D phi over all simplices (may be <= 0).
     Real minJacobianDeterminant(const NodeVectors<D>& u, bool threaded = true) const;
 
+    /// Cell culling of the inverse band (symmetric energy, on by default): d2 is sampled at the
+    /// centroid of every simplex of a cell only if a conservative bound (one sample of d2 at the
+    /// mean deformed corner, the 1-Lipschitz distance, the tier's interpolation slack) says the
+    /// cell may meet the band |d2 o phi| < sigma. The value and gradient are the same with and
+    /// without it (tests/energy/TestEnergy.cc compares them); the switch is for those tests.
+    void setCellCulling(bool on) { mCullCells = on; }
+
 private:
     template <bool Grad>
     Real evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
@@ -97,6 +108,14 @@ private:
 
     /// Centroid of simplex p of cell ci, Omega units (the quadrature point x_T).
     Vec<D> centroid(std::size_t ci, std::size_t p) const;
+    /// May a simplex of the cell (origin, side, corner displacements uc) have |d2(phi(x_T))| <
+    /// sigma? False only when certainly not (setCellCulling).
+    bool cellMayReachBand2(const Vec<D>& origin, Real side,
+                           const std::array<Vec<D>, SimplexLattice<D>::CORNERS>& uc) const;
+    /// Slack of the culling bound, in voxels of the tier of shape 2 sampled at the cell: covers
+    /// the interpolation error of that tier and of the finest one (both far below a voxel).
+    static constexpr Real CULL_SLACK_VOXELS = 2;
+    bool mCullCells = true;
     void cacheSourceGeometry();
     /// Frame of shape 1 at x: from the cache when the simplex is in the band of M1, sampled
     /// otherwise.

@@ -303,10 +303,18 @@ template <int D>
 bool
 FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d) const
 {
+    return sampleDistance(x, d, nullptr);
+}
+
+template <int D>
+bool
+FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const
+{
     Real t[D];
     int tier = -1;
     const float* base = locate(x, t, tier);
     if (base == nullptr) return false;
+    if (tierVoxelSize) *tierVoxelSize = mTiers[size_t(tier)].h;
     double w[D][3];
     for (int a = 0; a < D; ++a)
         splineWeights(t[a], w[a]);

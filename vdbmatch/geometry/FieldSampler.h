@@ -97,6 +97,8 @@ public:
     /// Interpolated signed distance only (cheap). Returns false if no tier covers x. The value
     /// is bitwise identical to the d returned by sample() at the same x.
     bool sampleDistance(const Vec<D>& x, Real& d) const;
+    /// As above, and the voxel size of the tier used (Omega units).
+    bool sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const;
 
     /// Interpolated d, n, R at x and, if @a deriv is not null, their derivatives. Returns false
     /// (leaving the outputs untouched) if no tier covers x. No allocation.

@@ -31,6 +31,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: metricTauFactor must be finite and >= 0, got "
                           << metricTauFactor);
+    if (!(settleCoarsening >= 1) || !std::isfinite(settleCoarsening))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: settleCoarsening must be finite and >= 1, got "
+                          << settleCoarsening);
     energy.validate();
     descent.validate();
 }
@@ -96,7 +100,9 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         const Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
         const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();
         const solver::H1Metric<D> metric(*in.lattice, tau, mOpts.metric, threaded);
-        const solver::Descent<D> descent(energy, metric, mOpts.descent);
+        solver::DescentOptions levelDescent = mOpts.descent;
+        levelDescent.settleTolerance /= std::pow(mOpts.settleCoarsening, mOpts.maxLevel - l);
+        const solver::Descent<D> descent(energy, metric, levelDescent);
         const solver::Report report = descent.run(u, observer, threaded, interrupter);
 
         result.lattice = in.lattice;

@@ -37,6 +37,8 @@ toString(ConvergenceTest test)
         return "gradient norm";
     case ConvergenceTest::EnergyDecrease:
         return "energy decrease";
+    case ConvergenceTest::Settled:
+        return "settled";
     }
     return "unknown";
 }
@@ -69,6 +71,8 @@ DescentOptions::validate() const
         fail("gradientTolerance must be finite and >= 0");
     if (!(energyTolerance >= 0) || !std::isfinite(energyTolerance))
         fail("energyTolerance must be finite and >= 0");
+    if (!(settleTolerance >= 0) || !std::isfinite(settleTolerance))
+        fail("settleTolerance must be finite and >= 0");
     if (energyWindow < 0) fail("energyWindow must be >= 0");
     if (restartInterval < 0) fail("restartInterval must be >= 0");
     if (lbfgsMemory < 1) fail("lbfgsMemory must be >= 1");
@@ -125,18 +129,21 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     // kept: applyInverse moves them to their masters), r = G^{-1} g expanded (r = P x), <g, r>.
     // Every direction p is a combination of such r, so u + t p stays in the constrained space.
     NodeVectors<D> g, r, gNew, rNew, p, uNew;
+    // The metric's CG starts from the previous representative (@a guess), which the next one
+    // resembles: fewer iterations than from 0.
     auto gradientAt = [&](const NodeVectors<D>& x, NodeVectors<D>& gx, NodeVectors<D>& rx,
-                          EnergyTerms& terms) -> Real {
+                          EnergyTerms& terms, const NodeVectors<D>* guess) -> Real {
         const Real E = energy.valueAndGradient(x, gx, &terms, threaded, interrupter);
         ++report.gradientEvaluations;
         if (!std::isfinite(E)) return E;
         metric.zeroDirichlet(gx);
-        report.metricIterations += std::size_t(metric.applyInverse(gx, rx, threaded).iterations);
+        report.metricIterations +=
+            std::size_t(metric.applyInverse(gx, rx, threaded, guess).iterations);
         return E;
     };
 
     EnergyTerms terms;
-    Real E = gradientAt(u, g, r, terms);
+    Real E = gradientAt(u, g, r, terms, nullptr);
     if (!std::isfinite(E)) {
         if (interrupted()) return finish(Status::Interrupted);
         OPENVDB_THROW(openvdb::ValueError, "Descent::run: the energy of the initial guess is +inf ("
@@ -237,7 +244,7 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
 
         const Real maxDisplacement = ls.step * p.cwiseAbs().maxCoeff();
         u.swap(uNew);
-        const Real Enew = gradientAt(u, gNew, rNew, terms);
+        const Real Enew = gradientAt(u, gNew, rNew, terms, &r);
         ++report.iterations;
         report.lastStep = ls.step;
         if (!std::isfinite(Enew)) {
@@ -306,10 +313,16 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
 
         history.push_back(E);
         const std::size_t w = std::size_t(mOpts.energyWindow);
-        if (w > 0 && history.size() > w &&
-            history[history.size() - 1 - w] - E <= mOpts.energyTolerance * std::abs(E)) {
-            report.convergedBy = ConvergenceTest::EnergyDecrease;
-            return finish(Status::Converged);
+        if (w > 0 && history.size() > w) {
+            const Real recent = history[history.size() - 1 - w] - E;
+            if (recent <= mOpts.energyTolerance * std::abs(E)) {
+                report.convergedBy = ConvergenceTest::EnergyDecrease;
+                return finish(Status::Converged);
+            }
+            if (mOpts.settleTolerance > 0 && recent <= mOpts.settleTolerance * (history[0] - E)) {
+                report.convergedBy = ConvergenceTest::Settled;
+                return finish(Status::Converged);
+            }
         }
     }
 }

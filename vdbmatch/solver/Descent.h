@@ -33,6 +33,12 @@
 /// and after each accepted step:
 /// 5. energy stagnation: E_{k-w} - E_k <= energyTolerance * |E_k|, w = energyWindow
 ///                                                                       -> Converged
+/// 6. settled: E_{k-w} - E_k <= settleTolerance * (E_0 - E_k), E_0 the energy at the start of
+///    the run: the last w iterations gained less than a fraction of what the run has gained so
+///    far                                                                -> Converged
+/// Test 6 is invariant under adding a constant to E or scaling it (unlike test 5, whose
+/// |E_k| contains e.g. the constant c_vol sigma^theta W_vol(1)|Omega| of the directional
+/// energy), so the symmetric and the directional energy stop at equal convergence with it.
 /// The defaults (relative gradient 1e-4, energy 1e-5 over 5 iterations, 500 iterations) were
 /// chosen on circle -> ellipse (2D, levels 4..8) and sphere -> ellipsoid (3D, levels 3..5):
 /// there the stagnation test ends every level, after 25-320 iterations, with the matching
@@ -68,7 +74,7 @@ enum class Status {
 const char* toString(Status status);
 
 /// Which test declared convergence.
-enum class ConvergenceTest { None, GradientNorm, EnergyDecrease };
+enum class ConvergenceTest { None, GradientNorm, EnergyDecrease, Settled };
 const char* toString(ConvergenceTest test);
 
 /// Result of a descent at one level, modelled on openvdb::math::pcg::State.
@@ -132,6 +138,9 @@ struct DescentOptions
     Real gradientTolerance = 0;
     /// Converged when E_{k-w} - E_k <= energyTolerance * |E_k|, w = energyWindow (0 disables).
     Real energyTolerance = 1e-5;
+    /// Converged when E_{k-w} - E_k <= settleTolerance * (E_0 - E_k) (0 disables).
+    Real settleTolerance = 0;
+    /// Window w of the energy tests (0 disables both).
     int energyWindow = 5;
     DescentMethod method = DescentMethod::NonlinearCG;
     ConjugateGradientUpdate update = ConjugateGradientUpdate::PolakRibierePlus;

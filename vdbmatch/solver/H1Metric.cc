@@ -341,13 +341,20 @@ H1Metric<D>::apply(const NodeVectors<D>& vIn, NodeVectors<D>& out, NodeVectors<D
 
 template <int D>
 MetricSolveInfo
-H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool threaded) const
+H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool threaded,
+                          const NodeVectors<D>* initialGuess) const
 {
     const std::size_t n = mLattice->nodeCount();
     if (std::size_t(gIn.cols()) != n)
         OPENVDB_THROW(openvdb::ValueError, "H1Metric::applyInverse: expected "
                                                << n << " node values, got " << gIn.cols());
-    out.setZero(D, Eigen::Index(n));
+    const bool warm = initialGuess && !mFactor && initialGuess->rows() == D &&
+                      std::size_t(initialGuess->cols()) == n;
+    if (warm) {
+        if (initialGuess != &out) out = *initialGuess;
+    } else {
+        out.setZero(D, Eigen::Index(n));
+    }
     if (unknownCount() == 0) return {};
     // P^T g: the hanging nodes' co-vector entries moved to their masters.
     const bool hasHanging = mLattice->hangingNodeCount() > 0;
@@ -360,7 +367,7 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     const NodeVectors<D>& g = hasHanging ? reduced : gIn;
     MetricSolveInfo info;
     if (!mFactor) {
-        info = solveCg(g, out, threaded);
+        info = solveCg(g, out, threaded, warm);
     } else {
         // All D components with one factorisation: right-hand sides as the columns of B.
         Eigen::Matrix<Real, Eigen::Dynamic, D> B(Eigen::Index(unknownCount()), D);
@@ -377,7 +384,7 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
 
 template <int D>
 MetricSolveInfo
-H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const
+H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded, bool warm) const
 {
     // Jacobi-preconditioned CG, the D components iterated together (one operator application
     // per iteration serves all of them); a converged component is frozen. The vector updates
@@ -407,18 +414,41 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) 
     };
     const auto& invDiag = mInverseDiagonal;
     NodeVectors<D> r(D, n), z(D, n), p(D, n), q, perSlot, expanded;
-    // r = g (Dirichlet entries 0), z = p = D^{-1} r; sums: |r|^2, r.z
+    // |b|: the norm of g on the free nodes (the tolerance is relative to it, warm or not).
+    const Col bNorm = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
+                          for (Eigen::Index i = b; i < e; ++i)
+                              if (invDiag[i] != 0) acc.col(0) += g.col(i).cwiseProduct(g.col(i));
+                      })
+                          .col(0)
+                          .cwiseSqrt();
+    // Warm start: x0 = the guess on the free nodes (0 elsewhere, and in a component whose
+    // right-hand side is 0), q = A x0 (G acts on each component separately).
+    if (warm) {
+        Col keep;
+        for (int c = 0; c < D; ++c)
+            keep[c] = bNorm[c] > 0 ? 1.0 : 0.0;
+        pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>&) {
+            for (Eigen::Index i = b; i < e; ++i) {
+                if (invDiag[i] == 0)
+                    x.col(i).setZero();
+                else
+                    x.col(i) = x.col(i).cwiseProduct(keep);
+            }
+        });
+        apply(x, q, perSlot, expanded, threaded);
+    }
+    // r = g - A x0 (Dirichlet entries 0), z = p = D^{-1} r; sums: |r|^2, r.z
     auto sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
         for (Eigen::Index i = b; i < e; ++i) {
             r.col(i) = invDiag[i] != 0 ? Col(g.col(i)) : Col::Zero();
+            if (warm && invDiag[i] != 0) r.col(i) -= q.col(i);
             z.col(i) = invDiag[i] * r.col(i);
             p.col(i) = z.col(i);
             acc.col(0) += r.col(i).cwiseProduct(r.col(i));
             acc.col(1) += r.col(i).cwiseProduct(z.col(i));
         }
     });
-    const Col bNorm = sums.col(0).cwiseSqrt();
-    Col rNorm = bNorm, rz = sums.col(1);
+    Col rNorm = sums.col(0).cwiseSqrt(), rz = sums.col(1);
     MetricSolveInfo info;
     auto done = [&](int c) { return !(rNorm[c] > mOpts.cgTolerance * bNorm[c]); };
     auto allDone = [&] {

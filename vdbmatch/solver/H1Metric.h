@@ -157,8 +157,12 @@ public:
     /// every node's entry as the energy gradient gives it; Dirichlet entries ignored, hanging
     /// entries moved to their masters), expanded: 0 at the Dirichlet nodes, interpolated at the
     /// hanging nodes. @a out may not alias @a g.
-    MetricSolveInfo applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out,
-                                 bool threaded = true) const;
+    /// @param initialGuess  optional starting point of the CG iteration (D x nodeCount, e.g. the
+    ///                      representative of the previous gradient in a descent; its free-node
+    ///                      values are used): fewer iterations when it is close to the solution.
+    ///                      Ignored by the direct solver. May alias @a out.
+    MetricSolveInfo applyInverse(const NodeVectors<D>& g, NodeVectors<D>& out, bool threaded = true,
+                                 const NodeVectors<D>* initialGuess = nullptr) const;
 
     /// The pairing g.v summed over the non-Dirichlet nodes, hanging ones included (co-vector g,
     /// vector v). For v = P x (e.g. the output of applyInverse) it equals (P^T g).x.
@@ -179,7 +183,9 @@ public:
 private:
     using Factor = Eigen::SimplicialLDLT<SparseMatrix>;
 
-    MetricSolveInfo solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded) const;
+    /// Solves for x; starts from x's free-node values if @a warm, else from 0.
+    MetricSolveInfo solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded,
+                            bool warm) const;
     /// apply() with caller-owned per-slot and expansion buffers (reused across CG iterations).
     void apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
                NodeVectors<D>& expanded, bool threaded) const;

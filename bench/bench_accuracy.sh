@@ -1,0 +1,174 @@
+#!/usr/bin/env bash
+# Accuracy benchmark on synthetic pairs with a known ground-truth map g (issue 8, item 3).
+#
+# Generates the pairs (bench/accuracy/make_pairs.py: a creature in 3D and a figure in 2D, each
+# moved by an articulated limb motion, a swirl/bend and a mild anisotropic stretch; the target is
+# g applied to the source's vertices), then for every pair and energy runs vdb_match forward
+# (source -> target) and reverse (target -> source) with the same options, `vdb_match
+# consistency` on the two deformations, and prints one row per pair x energy
+# (bench/accuracy/score.py; lengths in unit-box units):
+#   fwd s, rev s  wall seconds of the forward and the reverse match
+#   resid         mean |d2(phi(v))| over M1's vertices (report.json result.residual.meanUnit)
+#   err mean/p95  mean and 95th percentile of |phi(v) - g(v)| over M1's vertices
+#   rev err       mean |psi(g(v)) - v| over M2's vertices (the reverse match against g^-1)
+#   motion        mean |g(v) - v|, for reference
+#   psi.phi       mean |psi(phi(v)) - v| over M1's vertices (vdb_match consistency)
+#   min det       min det D phi of the forward match (report.json result.minJacobian)
+# and per energy the mean of these over the pairs. results.tsv in the output directory holds the
+# same and more (max errors, reverse figures, iterations, statuses).
+#
+# Usage: bench/bench_accuracy.sh [VDB_MATCH] [--pairs a,b,...] [--levels3d 4..7] [--levels2d 4..9]
+#            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"]
+#   VDB_MATCH   default build/tools/vdb_match/vdb_match
+#   --pairs     default all: creature_articulated, creature_swirl, creature_stretch,
+#               figure_articulated, figure_swirl, figure_stretch (make_pairs.py --list)
+#   --levels3d  default 4..8 (the 3D default of vdb_match); --levels2d default 4..9
+#   --energies  default symmetric,directional
+#   --out DIR   keep pairs and outputs in DIR (pairs are regenerated only when missing or older
+#               than make_pairs.py); default: a temporary directory, removed at the end
+#   --extra     more vdb_match match options, e.g. --extra "--threads 1 --energy-tolerance 3e-2"
+#               (--threads is also passed to consistency)
+# Exit status: 0, or 1 with a message if generation, a match, consistency or scoring fails.
+set -euo pipefail
+
+usage() { sed -n '/^# Usage:/,/^# Exit status/p' "$0" | sed 's/^# \{0,1\}//'; }
+die() { echo "bench_accuracy.sh: $*" >&2; exit 1; }
+
+VDB_MATCH=
+PAIRS=all
+LEVELS3D=4..8
+LEVELS2D=4..9
+ENERGIES=symmetric,directional
+OUT=
+EXTRA=
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -h|--help) usage; exit 0 ;;
+    --pairs|--levels3d|--levels2d|--energies|--out|--extra)
+      [ $# -ge 2 ] || die "$1 needs a value"
+      case "$1" in
+        --pairs) PAIRS=$2 ;; --levels3d) LEVELS3D=$2 ;; --levels2d) LEVELS2D=$2 ;;
+        --energies) ENERGIES=$2 ;; --out) OUT=$2 ;; --extra) EXTRA=$2 ;;
+      esac
+      shift 2 ;;
+    --pairs=*) PAIRS=${1#*=}; shift ;;
+    --levels3d=*) LEVELS3D=${1#*=}; shift ;;
+    --levels2d=*) LEVELS2D=${1#*=}; shift ;;
+    --energies=*) ENERGIES=${1#*=}; shift ;;
+    --out=*) OUT=${1#*=}; shift ;;
+    --extra=*) EXTRA=${1#*=}; shift ;;
+    -*) usage >&2; die "unknown option $1" ;;
+    *) [ -z "$VDB_MATCH" ] || die "unexpected argument $1"; VDB_MATCH=$1; shift ;;
+  esac
+done
+
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+[ -n "$VDB_MATCH" ] || VDB_MATCH=$ROOT/build/tools/vdb_match/vdb_match
+case "$VDB_MATCH" in /*) ;; */*) VDB_MATCH=$PWD/$VDB_MATCH ;; esac
+[ -x "$VDB_MATCH" ] || command -v "$VDB_MATCH" >/dev/null 2>&1 || die "no executable $VDB_MATCH (build it first)"
+PYTHON=python3
+[ -x /usr/bin/python3 ] && PYTHON=/usr/bin/python3
+MAKE_PAIRS=$ROOT/bench/accuracy/make_pairs.py
+SCORE=$ROOT/bench/accuracy/score.py
+
+read -r -a EXTRA_ARGS <<<"$EXTRA"
+THREAD_ARGS=()
+for ((i = 0; i < ${#EXTRA_ARGS[@]}; i++)); do
+  case "${EXTRA_ARGS[i]}" in
+    --threads) THREAD_ARGS=(--threads "${EXTRA_ARGS[i + 1]:-}") ;;
+    --threads=*) THREAD_ARGS=("${EXTRA_ARGS[i]}") ;;
+  esac
+done
+[ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
+IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
+IFS=, read -r -a ENERGY_LIST <<<"$ENERGIES"
+for e in "${ENERGY_LIST[@]}"; do
+  case "$e" in symmetric|directional) ;; *) die "unknown energy '$e' (symmetric or directional)" ;; esac
+done
+
+KEEP=1
+if [ -z "$OUT" ]; then
+  OUT=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-accuracy.XXXXXX")
+  KEEP=0
+  trap 'rm -rf "$OUT"' EXIT
+fi
+mkdir -p "$OUT"
+OUT=$(cd "$OUT" && pwd)
+
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -n1))"
+echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'"
+echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
+
+# --- pairs -----------------------------------------------------------------------------------
+missing=()
+for p in "${PAIR_LIST[@]}"; do
+  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ]; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  start=$(date +%s.%N)
+  "$PYTHON" "$MAKE_PAIRS" "$OUT/pairs" --only "$(IFS=,; echo "${missing[*]}")" >"$OUT/make_pairs.log" 2>&1 \
+      || { cat "$OUT/make_pairs.log" >&2; die "make_pairs.py failed"; }
+  echo "pairs generated in $(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }') s:"
+  sed -n 's/^/  /p' "$OUT/make_pairs.log"
+else
+  echo "pairs: reusing $OUT/pairs"
+fi
+echo
+
+# --- matches ---------------------------------------------------------------------------------
+run_match() {  # SOURCE TARGET DIR LEVELS ENERGY; sets WALL
+  local dir=$3 start end rc=0
+  mkdir -p "$dir"
+  local cmd=("$VDB_MATCH" match "$1" "$2" -o "$dir" --levels "$4" --energy "$5" --quiet "${EXTRA_ARGS[@]}")
+  start=$(date +%s.%N)
+  "${cmd[@]}" >"$dir/stdout.txt" 2>"$dir/stderr.txt" || rc=$?
+  end=$(date +%s.%N)
+  if [ $rc -ne 0 ] || [ ! -f "$dir/report.json" ] || [ ! -f "$dir/deformed.obj" ] || [ ! -f "$dir/deformation.vdb" ]; then
+    echo "bench_accuracy.sh: match failed (exit $rc): ${cmd[*]}" >&2
+    tail -n 20 "$dir/stderr.txt" >&2
+    exit 1
+  fi
+  WALL=$(awk -v a="$start" -v b="$end" 'BEGIN { printf "%.3f", b - a }')
+}
+
+TSV=$OUT/results.tsv
+rm -f "$TSV"
+"$PYTHON" "$SCORE" --header
+for energy in "${ENERGY_LIST[@]}"; do
+  for p in "${PAIR_LIST[@]}"; do
+    pd=$OUT/pairs/$p
+    dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
+    if [ "$dim" = 3 ]; then ext=obj; levels=$LEVELS3D; else ext=polyline; levels=$LEVELS2D; fi
+    rd=$OUT/runs/$p/$energy
+    run_match "$pd/source.$ext" "$pd/target.$ext" "$rd/forward" "$levels" "$energy"; fwall=$WALL
+    run_match "$pd/target.$ext" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy"; rwall=$WALL
+    "$VDB_MATCH" consistency "$rd/forward/deformation.vdb" "$rd/reverse/deformation.vdb" \
+        --source "$pd/source.$ext" --target "$pd/target.$ext" --json "${THREAD_ARGS[@]}" \
+        >"$rd/consistency.json" 2>"$rd/consistency.stderr" \
+        || { cat "$rd/consistency.stderr" >&2; die "consistency failed for $p ($energy)"; }
+    "$PYTHON" "$SCORE" --pair "$pd" --forward "$rd/forward" --reverse "$rd/reverse" \
+        --consistency "$rd/consistency.json" --energy "$energy" --levels "$levels" \
+        --wall "$fwall" --reverse-wall "$rwall" --tsv "$TSV" || die "scoring failed for $p ($energy)"
+  done
+done
+
+# --- means per energy ------------------------------------------------------------------------
+"$PYTHON" - "$TSV" <<'PY'
+import csv, sys
+rows = list(csv.DictReader(open(sys.argv[1]), delimiter="\t"))
+print()
+keys = ("forward_wall_s", "residual_mean", "err_mean", "err_p95", "reverse_err_mean", "motion_mean", "psi_phi_mean")
+for dim in ("3", "2"):
+    for energy in dict.fromkeys(r["energy"] for r in rows):
+        sel = [r for r in rows if r["energy"] == energy and r["dim"] == dim]
+        if not sel:
+            continue
+        m = {k: sum(float(r[k]) for r in sel) / len(sel) for k in keys}
+        print(f"mean {dim}D {energy:<11} over {len(sel)} pairs: fwd {m['forward_wall_s']:.1f} s, resid {m['residual_mean']:.2e}, "
+              f"err mean {m['err_mean']:.2e}, err p95 {m['err_p95']:.2e}, rev err {m['reverse_err_mean']:.2e}, "
+              f"motion {m['motion_mean']:.2e}, psi.phi {m['psi_phi_mean']:.2e}, min det {min(float(r['min_det']) for r in sel):.3f}")
+PY
+[ $KEEP = 0 ] || echo "results: $TSV"
