@@ -496,8 +496,8 @@ TEST(Descent, SettleTestEndsALevelOnRelativeProgress)
         ASSERT_EQ(history.size(), std::size_t(r.iterations) + 1);
         ASSERT_GT(history.size(), w);
         // The test holds at the last iteration and at no earlier one.
-        auto settled = [&](std::size_t k) {
-            return history[k - w] - history[k] <= opts.settleTolerance * (history[0] - history[k]);
+        auto settled = [&](std::size_t j) {
+            return history[j - w] - history[j] <= opts.settleTolerance * (history[0] - history[j]);
         };
         EXPECT_TRUE(settled(history.size() - 1));
         for (std::size_t j = w; j + 1 < history.size(); ++j)

@@ -455,8 +455,11 @@ TEST(H1Metric, WarmStartedConjugateGradient)
     EXPECT_TRUE(near.converged);
     EXPECT_LT(near.iterations, coldInfo.iterations);
     EXPECT_LT((warm - exact).norm(), 1e-6 * exact.norm());
-    for (std::size_t i = 0; i < lattice.nodeCount(); ++i)
-        if (lattice.isBoundaryNode(i)) EXPECT_EQ(warm.col(i).norm(), 0.0);
+    for (std::size_t i = 0; i < lattice.nodeCount(); ++i) {
+        if (lattice.isBoundaryNode(i)) {
+            EXPECT_EQ(warm.col(i).norm(), 0.0);
+        }
+    }
     // The direct solver ignores the guess.
     NodeVectors<3> viaDirect;
     direct.applyInverse(g, viaDirect, true, &guess);

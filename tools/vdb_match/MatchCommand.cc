@@ -55,6 +55,7 @@ struct MatchCliOptions
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
     double metricTolerance = MatchOptions::defaults(3).multiscale.metric.cgTolerance;
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
+    bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
     int progressEvery = 10;
     int threads = 0;
@@ -175,6 +176,16 @@ matchOptionTable()
                  throw UsageError("--optimizer expects 'ncg' or 'lbfgs', got '" + v + "'");
              }
              o.method = solver::parseDescentMethod(v);
+         }},
+        {"--initial-step", "RULE", "Descent",
+         "first line-search trial of an iteration: 'grow' (twice the last step) or 'slope' (the "
+         "last step scaled by the ratio of the directional derivatives) (default " +
+             std::string(d.initialStepFromSlope ? "slope" : "grow") + ")",
+         [](O& o, const std::string& v) {
+             if (v != "grow" && v != "slope") {
+                 throw UsageError("--initial-step expects 'grow' or 'slope', got '" + v + "'");
+             }
+             o.initialStepFromSlope = v == "slope";
          }},
         {"--metric-tolerance", "X", "Descent",
          "relative residual of the conjugate-gradient solve of the metric (default " +
@@ -414,6 +425,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
       << ", \"refinementMarginCells\": " << jsonNumber(opts.refinementMarginCells)
       << ", \"metricTauFactor\": " << jsonNumber(opts.multiscale.metricTauFactor)
       << ", \"optimizer\": " << jsonString(solver::toString(opts.multiscale.descent.method))
+      << ", \"initialStep\": "
+      << jsonString(opts.multiscale.descent.initialStepFromSlope ? "slope" : "grow")
       << ", \"metricTolerance\": " << jsonNumber(opts.multiscale.metric.cgTolerance)
       << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
       << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
@@ -502,6 +515,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.metricTauFactor = o.metricTau;
     opts.multiscale.metric.cgTolerance = o.metricTolerance;
     opts.multiscale.descent.method = o.method;
+    opts.multiscale.descent.initialStepFromSlope = o.initialStepFromSlope;
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;

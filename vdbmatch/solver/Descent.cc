@@ -293,9 +293,14 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
             slope = metric.pairing(g, p);
             restarted = memory.empty();
         } else {
+            const Real previousSlope = slope;
             p = beta * p - r;
             slope = metric.pairing(g, p);
             restarted = beta == 0;
+            if (mOpts.initialStepFromSlope && slope < 0 && previousSlope < 0) {
+                lineSearch.setInitialStep(std::min(mOpts.lineSearch.grow, previousSlope / slope) *
+                                          ls.step);
+            }
         }
         if (!(slope < 0)) {
             ++report.restarts;

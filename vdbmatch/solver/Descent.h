@@ -153,6 +153,10 @@ struct DescentOptions
     Real initialDisplacement = 0.5;
     /// L-BFGS: cap of the first trial step, in cells of side h of the moving node.
     Real maxTrialDisplacementCells = 4;
+    /// NCG: first trial step of an iteration from the previous one's first-order change,
+    /// t_k = t_{k-1} <g_{k-1}, p_{k-1}> / <g_k, p_k> (Nocedal & Wright, Numerical Optimization,
+    /// eq. 3.60), capped at lineSearch.grow * t_{k-1}; false: always grow * t_{k-1}.
+    bool initialStepFromSlope = false;
     ArmijoOptions lineSearch;
 
     /// Throws openvdb::ValueError naming the first invalid field.
