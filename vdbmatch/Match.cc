@@ -90,7 +90,7 @@ MatchOptions::defaults(int dim)
     opts.multiscale = multiscale::MultiscaleOptions::defaults(dim);
     opts.multiscale.descent.energyTolerance = DEFAULT_MATCH_ENERGY_TOLERANCE;
     opts.multiscale.descent.settleTolerance = DEFAULT_MATCH_SETTLE_TOLERANCE;
-    opts.multiscale.settleCoarsening = DEFAULT_MATCH_SETTLE_COARSENING;
+    opts.multiscale.toleranceCoarsening = DEFAULT_MATCH_TOLERANCE_COARSENING;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     return opts;
 }

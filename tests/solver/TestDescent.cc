@@ -516,6 +516,6 @@ TEST(Descent, RejectsInvalidSettleTolerance)
     opts.settleTolerance = std::numeric_limits<Real>::infinity();
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
     MultiscaleOptions m = MultiscaleOptions::defaults(2);
-    m.settleCoarsening = 0.5;
+    m.toleranceCoarsening = 0.5;
     EXPECT_THROW(m.validate(), openvdb::ValueError);
 }

@@ -49,7 +49,7 @@ struct MatchCliOptions
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
     double settleTolerance = MatchOptions::defaults(3).multiscale.descent.settleTolerance;
-    double settleCoarsening = MatchOptions::defaults(3).multiscale.settleCoarsening;
+    double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
@@ -147,17 +147,17 @@ matchOptionTable()
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
          [](O& o, const std::string& v) { o.maxIterations = parseInt("--max-iterations", v); }},
         {"--energy-tolerance", "X", "Descent",
-         "a level has converged when the energy fell by less than X (relative) over 5 "
-         "iterations (default " + formatNumber(d.energyTolerance) + ")",
+         "the last level ends when the energy fell by less than X (relative, its constant part "
+         "excluded) over 5 iterations (default " + formatNumber(d.energyTolerance) + ")",
          [](O& o, const std::string& v) { o.energyTolerance = parseDouble("--energy-tolerance", v); }},
         {"--settle-tolerance", "X", "Descent",
-         "a level has converged when its last 5 iterations lowered the energy by less than X "
-         "times what the level has lowered it so far (default " + formatNumber(d.settleTolerance) + ")",
+         "... or when its last 5 iterations lowered the energy by less than X times what the "
+         "level has lowered it so far (default " + formatNumber(d.settleTolerance) + ": off)",
          [](O& o, const std::string& v) { o.settleTolerance = parseDouble("--settle-tolerance", v); }},
-        {"--settle-coarsening", "F", "Descent",
-         "level l uses the settle tolerance divided by F^(last level - l): coarse levels, where "
-         "iterations are cheap, converge further (default " + formatNumber(d.settleCoarsening) + ")",
-         [](O& o, const std::string& v) { o.settleCoarsening = parseDouble("--settle-coarsening", v); }},
+        {"--tolerance-coarsening", "F", "Descent",
+         "level l divides the energy and settle tolerances by F^(last level - l): coarse levels, "
+         "where iterations are cheap, converge further (default " + formatNumber(d.toleranceCoarsening) + ")",
+         [](O& o, const std::string& v) { o.toleranceCoarsening = parseDouble("--tolerance-coarsening", v); }},
         {"--gradient-tolerance", "X", "Descent",
          "... or when the H1 gradient norm fell below X times its initial value (default " +
              formatNumber(d.gradientTolerance) + ")",
@@ -431,7 +431,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
       << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
       << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
       << ", \"settleTolerance\": " << jsonNumber(opts.multiscale.descent.settleTolerance)
-      << ", \"settleCoarsening\": " << jsonNumber(opts.multiscale.settleCoarsening)
+      << ", \"toleranceCoarsening\": " << jsonNumber(opts.multiscale.toleranceCoarsening)
       << ", \"relativeGradientTolerance\": "
       << jsonNumber(opts.multiscale.descent.relativeGradientTolerance) << "},\n";
     s << "  \"levels\": [";
@@ -519,7 +519,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;
-    opts.multiscale.settleCoarsening = o.settleCoarsening;
+    opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;

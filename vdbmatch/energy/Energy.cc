@@ -394,6 +394,21 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
 
 template <int D>
 Real
+Energy<D>::constantOffset() const
+{
+    if (mKind == EnergyKind::Symmetric) return 0;
+    Real volume = 0;
+    for (const auto& cell : mLattice->cells()) {
+        Real v = 1;
+        for (int a = 0; a < D; ++a)
+            v *= mLattice->h() * Real(1 << cell.log2Size);
+        volume += v;
+    }
+    return mVolumeWeight * math::volW<D>(Mat<D>::Identity()) * volume;
+}
+
+template <int D>
+Real
 Energy<D>::value(const NodeVectors<D>& u, EnergyTerms* terms, bool threaded,
                  openvdb::util::NullInterrupter* interrupter) const
 {

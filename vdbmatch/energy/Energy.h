@@ -62,6 +62,11 @@ public:
            Real sigma = 0);
 
     Real sigma() const { return mSigma; }
+    /// The energy of phi = Id when both shapes' band terms vanish: the constant part of E that no
+    /// deformation changes by itself, c_vol sigma^theta W_vol(1) |lattice| for the directional
+    /// energy (eq:EcomparisonVol: W_vol(1) = 13.39 in 3D, 2 in 2D), 0 for the symmetric one
+    /// (W(1) = 0). Stopping tests subtract it so that both energies stop at equal convergence.
+    Real constantOffset() const;
     EnergyKind kind() const { return mKind; }
     const SimplexLattice<D>& lattice() const { return *mLattice; }
 

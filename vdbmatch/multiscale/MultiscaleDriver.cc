@@ -31,10 +31,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: metricTauFactor must be finite and >= 0, got "
                           << metricTauFactor);
-    if (!(settleCoarsening >= 1) || !std::isfinite(settleCoarsening))
+    if (!(toleranceCoarsening >= 1) || !std::isfinite(toleranceCoarsening))
         OPENVDB_THROW(openvdb::ValueError,
-                      "MultiscaleOptions: settleCoarsening must be finite and >= 1, got "
-                          << settleCoarsening);
+                      "MultiscaleOptions: toleranceCoarsening must be finite and >= 1, got "
+                          << toleranceCoarsening);
     energy.validate();
     descent.validate();
 }
@@ -101,7 +101,9 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();
         const solver::H1Metric<D> metric(*in.lattice, tau, mOpts.metric, threaded);
         solver::DescentOptions levelDescent = mOpts.descent;
-        levelDescent.settleTolerance /= std::pow(mOpts.settleCoarsening, mOpts.maxLevel - l);
+        const Real tighten = std::pow(mOpts.toleranceCoarsening, mOpts.maxLevel - l);
+        levelDescent.settleTolerance /= tighten;
+        levelDescent.energyTolerance /= tighten;
         const solver::Descent<D> descent(energy, metric, levelDescent);
         const solver::Report report = descent.run(u, observer, threaded, interrupter);
 

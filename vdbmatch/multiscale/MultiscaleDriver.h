@@ -72,10 +72,11 @@ struct MultiscaleOptions
     Real metricTauFactor = solver::DEFAULT_METRIC_TAU_FACTOR;
     solver::H1MetricOptions metric;
     solver::DescentOptions descent;
-    /// Cascadic schedule of the settle test (DescentOptions::settleTolerance): level l uses
-    /// descent.settleTolerance / settleCoarsening^(maxLevel - l), so that coarse levels, where
-    /// iterations are cheap, converge further than the finest one (>= 1; 1: the same everywhere).
-    Real settleCoarsening = 1;
+    /// Cascadic schedule of the energy tests (DescentOptions::settleTolerance and
+    /// energyTolerance): level l divides both by toleranceCoarsening^(maxLevel - l), so that coarse
+    /// levels, where iterations are cheap, converge further than the finest one (>= 1; 1: the
+    /// same everywhere).
+    Real toleranceCoarsening = 1;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
     static MultiscaleOptions defaults(int dim);

@@ -220,6 +220,9 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         p = -p;
     };
     std::vector<Real> history{E};
+    // The relative stagnation test compares with E minus its constant part (zero for the
+    // symmetric energy), so that it means the same for both energies.
+    const Real offset = energy.constantOffset();
 
     while (true) {
         if (!(report.gradNorm > gradLimit)) {
@@ -320,7 +323,7 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         const std::size_t w = std::size_t(mOpts.energyWindow);
         if (w > 0 && history.size() > w) {
             const Real recent = history[history.size() - 1 - w] - E;
-            if (recent <= mOpts.energyTolerance * std::abs(E)) {
+            if (recent <= mOpts.energyTolerance * std::abs(E - offset)) {
                 report.convergedBy = ConvergenceTest::EnergyDecrease;
                 return finish(Status::Converged);
             }
