@@ -50,10 +50,10 @@ namespace vdbmatch {
 /// stops at the same convergence as the symmetric one; MultiscaleOptions::toleranceCoarsening
 /// makes the coarse levels, where iterations are cheap, converge further). Measured on the
 /// accuracy benchmark (docs/performance.md): closer to the true correspondence than the former
-/// default (1e-3 at every level, constant included) on every pair. The settle test
+/// default (1e-3 at every level, constant included). The settle test
 /// (DescentOptions::settleTolerance, --settle-tolerance) stops much earlier and is off: on the
 /// benchmark it lost accuracy on 5 of 6 pairs.
-constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 3e-3;
+constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not

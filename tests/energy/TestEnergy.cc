@@ -219,3 +219,21 @@ TEST(Energy, CellCullingIsExact2D)
 {
     checkCullingIsExact<2>(6);
 }
+
+TEST(Energy, ConstantOffsetIsTheEnergyOfTheIdentityForIdenticalShapes)
+{
+    // Energy::constantOffset: c_vol sigma^theta W_vol(1)|Omega| for the directional energy (the
+    // value of every phi = Id between identical shapes), 0 for the symmetric one.
+    for (int level : {3, 4}) {
+        const auto sdf = targetSdf<3>(level);
+        MatchingProblem<3> dir(level, sdf, sdf, EnergyParameters::defaults(3),
+                               EnergyKind::Directional);
+        MatchingProblem<3> sym(level, sdf, sdf, EnergyParameters::defaults(3),
+                               EnergyKind::Symmetric);
+        const NodeVectors<3> u = NodeVectors<3>::Zero(3, dir.lattice->nodeCount());
+        const Real e = dir.energy->value(u);
+        EXPECT_GT(e, 0.0);
+        EXPECT_NEAR(dir.energy->constantOffset(), e, 1e-12 * e);
+        EXPECT_EQ(sym.energy->constantOffset(), 0.0);
+    }
+}
