@@ -92,7 +92,9 @@ fi
 count=$((count + 1))
 "$VDB_MATCH" energy "$SPHERE" "$ELLIPSOID" --level 8 --quiet >"$SCRATCH/out" 2>"$SCRATCH/err" &
 pid=$!
-sleep 1
+# Long enough for the command to install its handler even on a loaded machine (level 8 takes far
+# longer than this to evaluate).
+sleep 3
 kill -INT "$pid" 2>/dev/null
 wait "$pid"
 code=$?
