@@ -11,6 +11,7 @@
 
 #include <cmath>
 #include <random>
+#include <vector>
 
 using namespace vdbmatch;
 
@@ -75,6 +76,33 @@ checkRoundTrip()
     // Outside the domain phi = Id.
     EXPECT_EQ(field.displacement(placement.toWorld(openvdb::Vec3d(1.5, 0.5, 0.5))),
               openvdb::Vec3d(0.0));
+
+    // The exact inverse, at random points and at points of the lattice's coarse cells, on their
+    // faces and next to hanging nodes (nodes of the finest grid: faces of every voxel simplex).
+    const double tol = 1e-5 * field.voxelSize();
+    double worstInverse = 0;
+    auto checkInverse = [&](const Vec<D>& x) {
+        openvdb::Vec3d unit(0.5);
+        for (int a = 0; a < D; ++a)
+            unit[a] = x[a];
+        const openvdb::Vec3d world = placement.toWorld(unit);
+        const DeformationField::InverseResult back = field.inverse(field.apply(world));
+        ASSERT_TRUE(back.found);
+        worstInverse = std::max(worstInverse, (back.x - world).length());
+        const DeformationField::InverseResult pre = field.inverse(world);
+        ASSERT_TRUE(pre.found);
+        worstInverse = std::max(worstInverse, (field.apply(pre.x) - world).length());
+    };
+    for (int k = 0; k < 2000; ++k) {
+        Vec<D> x;
+        for (int a = 0; a < D; ++a)
+            x[a] = uniform(rng);
+        checkInverse(x);
+    }
+    for (std::size_t i = 0; i < lattice.nodeCount(); i += 7) {
+        checkInverse(lattice.nodePosition(i));
+    }
+    EXPECT_LT(worstInverse, tol);
 }
 
 } // namespace
@@ -86,6 +114,150 @@ TEST(DeformationField, ReproducesAdaptiveLatticeMap2D)
 TEST(DeformationField, ReproducesAdaptiveLatticeMap3D)
 {
     checkRoundTrip<3>();
+}
+
+namespace {
+
+/// A grid of 2^level + 1 nodes per axis (one layer in 2D) with a swirl about the domain's centre
+/// line: the circle of radius r turns by angle(r) = turn * b(r), b a smooth bump vanishing at
+/// r = 0.45 of the domain. Each circle is mapped onto itself, so phi is a bijection; a turn of
+/// 1.5 rad moves nodes by up to ~10 cells at level 5, far from the fixed-point guess.
+openvdb::Vec3SGrid::Ptr
+swirlGrid(int dim, int level, double turn, double voxelWorld)
+{
+    const int n = 1 << level;
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    auto acc = grid->getAccessor();
+    for (int k = 0; k <= (dim == 3 ? n : 0); ++k) {
+        for (int j = 0; j <= n; ++j) {
+            for (int i = 0; i <= n; ++i) {
+                const double x = double(i) / n - 0.5, y = double(j) / n - 0.5;
+                const double z = dim == 3 ? double(k) / n : 0.5;
+                const double r = std::sqrt(x * x + y * y);
+                const double R = 0.45;
+                double bump = r < R ? std::pow(std::cos(0.5 * M_PI * r / R), 2) : 0.0;
+                bump *= std::sin(M_PI * z); // vanishes on the z faces
+                const double a = turn * bump;
+                const double rx = std::cos(a) * x - std::sin(a) * y;
+                const double ry = std::sin(a) * x + std::cos(a) * y;
+                acc.setValueOn(openvdb::Coord(i, j, k),
+                               openvdb::Vec3s(float((rx - x) * n * voxelWorld),
+                                              float((ry - y) * n * voxelWorld), 0.0f));
+            }
+        }
+    }
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelWorld));
+    grid->transform().postTranslate(openvdb::Vec3d(-3.0, 1.0, 2.0));
+    return grid;
+}
+
+void
+checkSwirlInverse(int dim)
+{
+    const double voxel = 0.1;
+    const DeformationField field(swirlGrid(dim, 5, 1.5, voxel));
+    ASSERT_EQ(field.dimension(), dim);
+    const openvdb::BBoxd box = field.worldBounds();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    double worst = 0;
+    int longestWalk = 0;
+    std::vector<openvdb::Vec3d> points;
+    for (int k = 0; k < 3000; ++k) {
+        openvdb::Vec3d y = box.min() + (box.max() - box.min()) * openvdb::Vec3d(uniform(rng),
+                                                                                uniform(rng),
+                                                                                uniform(rng));
+        if (dim == 2) y[2] = box.min()[2];
+        points.push_back(y);
+        const DeformationField::InverseResult r = field.inverse(y);
+        ASSERT_TRUE(r.found);
+        longestWalk = std::max(longestWalk, r.simplices);
+        worst = std::max(worst, (field.apply(r.x) - y).length());
+        worst = std::max(worst, (field.inverse(field.apply(y)).x - y).length());
+    }
+    EXPECT_LT(worst, 1e-5 * voxel);
+    EXPECT_GT(longestWalk, 5); // the walk, not the initial guess, found these
+
+    // Outside Omega phi^{-1} = Id; in parallel and serially, the same bits.
+    const openvdb::Vec3d outside = box.max() + openvdb::Vec3d(1.0, 0.5, dim == 3 ? 0.25 : 0.0);
+    EXPECT_EQ(field.inverse(outside).x, outside);
+    std::vector<openvdb::Vec3d> serial = points, parallel = points;
+    EXPECT_EQ(field.mapPoints(serial, /*inverse=*/true, /*threaded=*/false), 0u);
+    EXPECT_EQ(field.mapPoints(parallel, /*inverse=*/true, /*threaded=*/true), 0u);
+    EXPECT_EQ(serial, parallel);
+    EXPECT_EQ(field.mapPoints(parallel, /*inverse=*/false), 0u);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        EXPECT_LT((parallel[i] - points[i]).length(), 1e-5 * voxel);
+    }
+}
+
+} // namespace
+
+TEST(DeformationField, ExactInverseOfASwirl2D)
+{
+    checkSwirlInverse(2);
+}
+TEST(DeformationField, ExactInverseOfASwirl3D)
+{
+    checkSwirlInverse(3);
+}
+
+TEST(DeformationField, InverseOfTheIdentityIsTheIdentity)
+{
+    const DeformationField field(swirlGrid(3, 3, 0.0, 0.5));
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> uniform(-1.0, 6.0);
+    for (int k = 0; k < 200; ++k) {
+        const openvdb::Vec3d y(uniform(rng), uniform(rng), uniform(rng));
+        const DeformationField::InverseResult r = field.inverse(y);
+        EXPECT_TRUE(r.found);
+        EXPECT_EQ(r.x, y);
+        EXPECT_EQ(r.simplices, 1);
+    }
+}
+
+TEST(DeformationField, InverseReportsAFoldInsteadOfLooping)
+{
+    // A mirror image of the domain (phi_x(i) = n - i): every simplex inside is inverted.
+    auto grid = swirlGrid(2, 3, 0.0, 1.0);
+    for (auto v = grid->beginValueOn(); v; ++v) {
+        v.setValue(openvdb::Vec3s(float(8 - 2 * v.getCoord().x()), 0.0f, 0.0f));
+    }
+    const DeformationField field(grid);
+    EXPECT_LT(field.jacobianDeterminant(openvdb::Vec3d(4.5, 4.2, 0.0)), 0.0);
+    // (The simplices between the last node and the identity beyond the grid are not inverted:
+    // a walk may end there at a true preimage. What is asserted: no hang, no false claim.)
+    int failures = 0;
+    for (int i = 0; i < 8; ++i) {
+        for (int j = 0; j < 8; ++j) {
+            const openvdb::Vec3d y(i + 0.3, j + 0.6, 0.0);
+            const DeformationField::InverseResult r = field.inverse(y);
+            EXPECT_TRUE(std::isfinite(r.x.length()));
+            if (r.found) {
+                EXPECT_LT((field.apply(r.x) - y).length(), 1e-9);
+            } else {
+                ++failures;
+            }
+        }
+    }
+    EXPECT_GT(failures, 16);
+}
+
+TEST(DeformationField, JacobianMatchesFiniteDifferences)
+{
+    const DeformationField field(swirlGrid(3, 4, 1.0, 0.25));
+    const openvdb::Vec3d x = field.worldBounds().getCenter() + openvdb::Vec3d(0.113, 0.071, 0.19);
+    const openvdb::Mat3d J = field.jacobian(x);
+    const double eps = 1e-4 * field.voxelSize();
+    for (int c = 0; c < 3; ++c) {
+        openvdb::Vec3d e(0.0);
+        e[c] = eps;
+        // x is inside one simplex: phi is affine on a neighbourhood.
+        const openvdb::Vec3d column = (field.apply(x + e) - field.apply(x - e)) / (2 * eps);
+        for (int r = 0; r < 3; ++r)
+            EXPECT_NEAR(J(r, c), column[r], 1e-6);
+    }
+    EXPECT_NEAR(field.jacobianDeterminant(x), J.det(), 1e-12);
 }
 
 TEST(DeformationField, RejectsRotatedTransforms)

@@ -5,8 +5,12 @@
 
 #include <openvdb/Exceptions.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 
 namespace vdbmatch {
@@ -57,7 +61,13 @@ void
 DeformationField::locate(const openvdb::Vec3d& xWorld, openvdb::Coord* vertices, double* weights,
                          int* axes) const
 {
-    const openvdb::Vec3d p = mGrid->transform().worldToIndex(xWorld);
+    locateIndex(mGrid->transform().worldToIndex(xWorld), vertices, weights, axes);
+}
+
+void
+DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
+                              int* axes) const
+{
     openvdb::Coord origin;
     std::array<double, 3> t{{0, 0, 0}};
     for (int a = 0; a < 3; ++a) {
@@ -99,8 +109,8 @@ DeformationField::displacement(const openvdb::Vec3d& xWorld) const
     return u;
 }
 
-double
-DeformationField::jacobianDeterminant(const openvdb::Vec3d& xWorld) const
+openvdb::Mat3d
+DeformationField::jacobian(const openvdb::Vec3d& xWorld) const
 {
     openvdb::Coord v[4];
     double w[4];
@@ -116,8 +126,156 @@ DeformationField::jacobianDeterminant(const openvdb::Vec3d& xWorld) const
         for (int r = 0; r < mDim; ++r)
             A(r, axes[m - 1]) += du[r];
     }
+    return A;
+}
+
+double
+DeformationField::jacobianDeterminant(const openvdb::Vec3d& xWorld) const
+{
+    const openvdb::Mat3d A = jacobian(xWorld);
     if (mDim == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
     return A.det();
+}
+
+DeformationField::InverseResult
+DeformationField::inverse(const openvdb::Vec3d& yWorld) const
+{
+    // Initial guess: two fixed-point iterates of x = y - u(x) (exact where u is locally
+    // constant, and the walk makes up for the rest).
+    openvdb::Vec3d x = yWorld - displacement(yWorld);
+    x = yWorld - displacement(x);
+    return inverse(yWorld, x);
+}
+
+DeformationField::InverseResult
+DeformationField::inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld) const
+{
+    const openvdb::math::Transform& xform = mGrid->transform();
+    const openvdb::Vec3d yIndex = xform.worldToIndex(yWorld);
+    InverseResult r = inverseIndex(yIndex, xform.worldToIndex(guessWorld));
+    // As a displacement from y, so that phi^{-1}(y) = y exactly where phi = Id.
+    r.x = yWorld + (r.x - yIndex) * mVoxelSize;
+    if (mDim == 2) r.x[2] = yWorld[2];
+    return r;
+}
+
+DeformationField::InverseResult
+DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) const
+{
+    // Nudge that picks the simplex the walk enters at a face (index units; coordinates are
+    // below 2^13, whose spacing in double is ~1e-12).
+    constexpr double NUDGE = 1e-9;
+    // Steps allowed: a segment crosses O(its length in cells) simplices; 2^16 is far above any
+    // walk from a guess inside the grid.
+    constexpr int MAX_STEPS = 1 << 16;
+    ConstAccessor acc(mGrid->tree());
+    const double toIndex = 1.0 / mVoxelSize;
+    openvdb::Vec3d y = yIn;
+    if (mDim == 2) {
+        y[2] = mSliceK;
+        x[2] = mSliceK;
+    }
+    InverseResult result;
+    openvdb::Vec3d hint(0.0); // direction of the last move, unit length
+    for (int step = 0; step < MAX_STEPS; ++step) {
+        openvdb::Coord v[4];
+        double w[4];
+        int axes[3];
+        locateIndex(x + hint * NUDGE, v, w, axes);
+        ++result.simplices;
+        // Barycentric coordinates of x in this simplex (the path order of the nudged point;
+        // slightly negative ones are rounding) and the affine map phi(z) = z + sum lambda_m U_m.
+        const openvdb::Vec3d t = x - openvdb::Vec3d(v[0].x(), v[0].y(), v[0].z());
+        double lambda[4];
+        lambda[0] = 1.0 - t[axes[0]];
+        for (int m = 1; m < mDim; ++m)
+            lambda[m] = t[axes[m - 1]] - t[axes[m]];
+        lambda[mDim] = t[axes[mDim - 1]];
+        openvdb::Vec3d U[4];
+        openvdb::Vec3d q = x;
+        for (int m = 0; m <= mDim; ++m) {
+            U[m] = openvdb::Vec3d(acc.getValue(v[m])) * toIndex;
+            q += U[m] * lambda[m];
+        }
+        openvdb::Mat3d A = openvdb::Mat3d::identity();
+        for (int m = 1; m <= mDim; ++m) {
+            const openvdb::Vec3d du = U[m] - U[m - 1];
+            for (int row = 0; row < mDim; ++row)
+                A(row, axes[m - 1]) += du[row];
+        }
+        const double det =
+            mDim == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
+        if (!(det > 0.0)) {
+            result.found = false;
+            result.x = x;
+            return result;
+        }
+        // The preimage of [q, y] in this simplex: x + s d, d = A^{-1} (y - q).
+        const openvdb::Vec3d rhs = y - q;
+        openvdb::Vec3d d(0.0);
+        if (mDim == 2) {
+            d[0] = (A(1, 1) * rhs[0] - A(0, 1) * rhs[1]) / det;
+            d[1] = (A(0, 0) * rhs[1] - A(1, 0) * rhs[0]) / det;
+        } else {
+            d = A.inverse() * rhs;
+        }
+        // Rates of change of the barycentric coordinates along d, and the exit parameter.
+        double mu[4];
+        mu[0] = -d[axes[0]];
+        for (int m = 1; m < mDim; ++m)
+            mu[m] = d[axes[m - 1]] - d[axes[m]];
+        mu[mDim] = d[axes[mDim - 1]];
+        double s = 1.0;
+        for (int m = 0; m <= mDim; ++m) {
+            if (mu[m] < 0.0) s = std::min(s, std::max(lambda[m], 0.0) / -mu[m]);
+        }
+        const double length = d.length();
+        if (s >= 1.0 - 1e-12 || length <= NUDGE) {
+            // y is in this simplex, or within the nudge of x (a walk through a vertex or an
+            // edge, where the exit test sees rounding): the affine inverse of this simplex,
+            // whose error is below |d| times the jump of D phi across the face.
+            result.x = x + d;
+            return result;
+        }
+        hint = d / length;
+        if (s * length < NUDGE) {
+            // At a face that the segment does not cross into this simplex (a degenerate
+            // crossing through an edge or a vertex): step off it by the nudge.
+            x += hint * NUDGE;
+        } else {
+            x += d * s;
+        }
+    }
+    result.found = false;
+    result.x = x;
+    return result;
+}
+
+std::size_t
+DeformationField::mapPoints(std::vector<openvdb::Vec3d>& points, bool inverse,
+                            bool threaded) const
+{
+    std::atomic<std::size_t> failed{0};
+    auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+        std::size_t bad = 0;
+        for (std::size_t i = range.begin(); i != range.end(); ++i) {
+            if (inverse) {
+                const InverseResult r = this->inverse(points[i]);
+                if (!r.found) ++bad;
+                points[i] = r.x;
+            } else {
+                points[i] = apply(points[i]);
+            }
+        }
+        failed += bad;
+    };
+    const tbb::blocked_range<std::size_t> all(0, points.size(), 1024);
+    if (threaded) {
+        tbb::parallel_for(all, body);
+    } else {
+        body(all);
+    }
+    return failed;
 }
 
 } // namespace vdbmatch

@@ -16,6 +16,18 @@
 /// 2D grids (all active voxels at one k, DeformationIO.h) are evaluated in the plane of that
 /// layer: the z of the query is ignored and the result keeps it.
 ///
+/// **Exact inverse.** u is extended by 0 beyond the active voxels, so phi is a piecewise-linear
+/// map of all of R^d that is the identity outside Omega; with det D phi > 0 on every simplex it is
+/// a bijection (a proper local homeomorphism that is the identity near infinity). inverse(y)
+/// finds the x with phi(x) = y by tracing the straight segment from phi(x0) to y through the
+/// deformed simplices (x0 an initial guess): in the simplex T containing the current point x,
+/// whose image is q = phi(x), the preimage of the segment [q, y] is the straight segment
+/// x + s A_T^{-1}(y - q), s in [0, 1], A_T = D phi on T. If it leaves T before s = 1 the walk
+/// moves to the exit point and continues in the next simplex along the same image segment; the
+/// image of the walk is the segment [phi(x0), y] itself, so it crosses each deformed simplex at
+/// most once and ends in the simplex containing phi^{-1}(y), where the affine inverse is exact.
+/// No iteration to a tolerance is involved: phi(inverse(y)) = y to rounding error.
+///
 /// Spaces: every position and displacement is in world units (the inputs' world space).
 /// Thread-safety: const queries may be called concurrently.
 /// @see paper sec:numerics
@@ -23,7 +35,9 @@
 
 #include <openvdb/openvdb.h>
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace vdbmatch {
 
@@ -57,11 +71,38 @@ public:
     }
     /// det D phi on the Kuhn simplex of the voxel grid that contains x (1 outside the grid).
     double jacobianDeterminant(const openvdb::Vec3d& xWorld) const;
+    /// D phi on the Kuhn simplex that contains x (the identity outside the grid; in 2D the third
+    /// row and column are those of the identity). On a face between simplices, one of them.
+    openvdb::Mat3d jacobian(const openvdb::Vec3d& xWorld) const;
+
+    /// Result of an inverse evaluation.
+    struct InverseResult
+    {
+        openvdb::Vec3d x;     ///< phi^{-1}(y), world units
+        int simplices = 0;    ///< simplices visited by the walk
+        bool found = true;    ///< false: the walk met a simplex with det D phi <= 0 or ran out
+                              ///< of steps (x is then the last point reached)
+    };
+    /// Exact phi^{-1}(y) (file comment), starting from the guess @a guessWorld (the fixed point
+    /// iterate x = y - u(x) if none is given). Outside Omega, phi^{-1}(y) = y.
+    InverseResult inverse(const openvdb::Vec3d& yWorld) const;
+    InverseResult inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld) const;
+
+    /// Moves every point by phi (or by phi^{-1} if @a inverse), in parallel if @a threaded; the
+    /// result does not depend on the thread count.
+    /// @return the number of points whose inverse walk did not end (found == false); 0 for phi
+    std::size_t mapPoints(std::vector<openvdb::Vec3d>& pointsWorld, bool inverse,
+                          bool threaded = true) const;
 
 private:
     /// Index position, cell origin and the containing simplex's path (vertices, weights).
     void locate(const openvdb::Vec3d& xWorld, openvdb::Coord* vertices, double* weights,
                 int* axes) const;
+    /// The same in index space.
+    void locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
+                     int* axes) const;
+    /// The walk of inverse(), in index space.
+    InverseResult inverseIndex(const openvdb::Vec3d& y, openvdb::Vec3d x) const;
 
     openvdb::Vec3SGrid::ConstPtr mGrid;
     int mDim = 3;
