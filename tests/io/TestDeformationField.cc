@@ -7,6 +7,8 @@
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
+#include <support/SwirlGrid.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -118,44 +120,11 @@ TEST(DeformationField, ReproducesAdaptiveLatticeMap3D)
 
 namespace {
 
-/// A grid of 2^level + 1 nodes per axis (one layer in 2D) with a swirl about the domain's centre
-/// line: the circle of radius r turns by angle(r) = turn * b(r), b a smooth bump vanishing at
-/// r = 0.45 of the domain. Each circle is mapped onto itself, so phi is a bijection; a turn of
-/// 1.5 rad moves nodes by up to ~10 cells at level 5, far from the fixed-point guess.
-openvdb::Vec3SGrid::Ptr
-swirlGrid(int dim, int level, double turn, double voxelWorld)
-{
-    const int n = 1 << level;
-    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
-    auto acc = grid->getAccessor();
-    for (int k = 0; k <= (dim == 3 ? n : 0); ++k) {
-        for (int j = 0; j <= n; ++j) {
-            for (int i = 0; i <= n; ++i) {
-                const double x = double(i) / n - 0.5, y = double(j) / n - 0.5;
-                const double z = dim == 3 ? double(k) / n : 0.5;
-                const double r = std::sqrt(x * x + y * y);
-                const double R = 0.45;
-                double bump = r < R ? std::pow(std::cos(0.5 * M_PI * r / R), 2) : 0.0;
-                bump *= std::sin(M_PI * z); // vanishes on the z faces
-                const double a = turn * bump;
-                const double rx = std::cos(a) * x - std::sin(a) * y;
-                const double ry = std::sin(a) * x + std::cos(a) * y;
-                acc.setValueOn(openvdb::Coord(i, j, k),
-                               openvdb::Vec3s(float((rx - x) * n * voxelWorld),
-                                              float((ry - y) * n * voxelWorld), 0.0f));
-            }
-        }
-    }
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelWorld));
-    grid->transform().postTranslate(openvdb::Vec3d(-3.0, 1.0, 2.0));
-    return grid;
-}
-
 void
 checkSwirlInverse(int dim)
 {
     const double voxel = 0.1;
-    const DeformationField field(swirlGrid(dim, 5, 1.5, voxel));
+    const DeformationField field(test::swirlGrid(dim, 5, 1.5, voxel));
     ASSERT_EQ(field.dimension(), dim);
     const openvdb::BBoxd box = field.worldBounds();
     std::mt19937 rng(11);
@@ -204,7 +173,7 @@ TEST(DeformationField, ExactInverseOfASwirl3D)
 
 TEST(DeformationField, InverseOfTheIdentityIsTheIdentity)
 {
-    const DeformationField field(swirlGrid(3, 3, 0.0, 0.5));
+    const DeformationField field(test::swirlGrid(3, 3, 0.0, 0.5));
     std::mt19937 rng(3);
     std::uniform_real_distribution<double> uniform(-1.0, 6.0);
     for (int k = 0; k < 200; ++k) {
@@ -219,7 +188,7 @@ TEST(DeformationField, InverseOfTheIdentityIsTheIdentity)
 TEST(DeformationField, InverseReportsAFoldInsteadOfLooping)
 {
     // A mirror image of the domain (phi_x(i) = n - i): every simplex inside is inverted.
-    auto grid = swirlGrid(2, 3, 0.0, 1.0);
+    auto grid = test::swirlGrid(2, 3, 0.0, 1.0);
     for (auto v = grid->beginValueOn(); v; ++v) {
         v.setValue(openvdb::Vec3s(float(8 - 2 * v.getCoord().x()), 0.0f, 0.0f));
     }
@@ -245,7 +214,7 @@ TEST(DeformationField, InverseReportsAFoldInsteadOfLooping)
 
 TEST(DeformationField, JacobianMatchesFiniteDifferences)
 {
-    const DeformationField field(swirlGrid(3, 4, 1.0, 0.25));
+    const DeformationField field(test::swirlGrid(3, 4, 1.0, 0.25));
     const openvdb::Vec3d x = field.worldBounds().getCenter() + openvdb::Vec3d(0.113, 0.071, 0.19);
     const openvdb::Mat3d J = field.jacobian(x);
     const double eps = 1e-4 * field.voxelSize();

@@ -121,45 +121,6 @@ activeBox(const DeformationField& field)
     return box;
 }
 
-/// Accumulates det over the d! Kuhn simplices of the cell with origin @a o.
-template <int D>
-void
-cellDeterminants(ConstAccessor& acc, const openvdb::Coord& o, double invH, JacobianStats& s)
-{
-    constexpr int CORNERS = 1 << D;
-    std::array<openvdb::Vec3d, CORNERS> u;
-    for (int c = 0; c < CORNERS; ++c) {
-        openvdb::Coord v = o;
-        for (int a = 0; a < D; ++a)
-            v[a] += (c >> a) & 1;
-        u[c] = openvdb::Vec3d(acc.getValue(v));
-    }
-    std::array<int, D> order;
-    for (int a = 0; a < D; ++a)
-        order[a] = a;
-    do {
-        // Path o -> o + e_order[0] -> ...: column order[m] of D phi is e + du / h.
-        double A[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-        int mask = 0;
-        for (int m = 0; m < D; ++m) {
-            const int next = mask | (1 << order[m]);
-            const openvdb::Vec3d du = (u[next] - u[mask]) * invH;
-            for (int r = 0; r < D; ++r)
-                A[r][order[m]] += du[r];
-            mask = next;
-        }
-        const double det = D == 2 ? A[0][0] * A[1][1] - A[0][1] * A[1][0]
-                                  : A[0][0] * (A[1][1] * A[2][2] - A[1][2] * A[2][1]) -
-                                        A[0][1] * (A[1][0] * A[2][2] - A[1][2] * A[2][0]) +
-                                        A[0][2] * (A[1][0] * A[2][1] - A[1][1] * A[2][0]);
-        s.min = std::min(s.min, det);
-        s.max = std::max(s.max, det);
-        ++s.simplices;
-        if (det < DET_LOW_THRESHOLD) ++s.belowThreshold;
-        if (det <= 0) ++s.nonPositive;
-    } while (std::next_permutation(order.begin(), order.end()));
-}
-
 template <int D>
 JacobianStats
 jacobianStatsImpl(const DeformationField& field, bool threaded,
@@ -174,19 +135,27 @@ jacobianStatsImpl(const DeformationField& field, bool threaded,
         complete = true;
         return total;
     }
-    const double invH = 1.0 / field.voxelSize();
     // One row of cells per (j, k); rows are combined in order.
     const std::size_t rows = std::size_t(ny) * std::size_t(nz);
     std::vector<JacobianStats> perRow(rows);
     complete = forEachChecked(rows, threaded, interrupter, [&](std::size_t r) {
-        ConstAccessor acc(field.grid().tree());
         const int j = lo[1] + int(r % std::size_t(ny));
         const int k = lo[2] + int(r / std::size_t(ny));
         JacobianStats s;
         s.min = INF_DET;
         s.max = -INF_DET;
-        for (int i = lo[0]; i < hi[0]; ++i)
-            cellDeterminants<D>(acc, openvdb::Coord(i, j, k), invH, s);
+        double dets[6];
+        for (int i = lo[0]; i < hi[0]; ++i) {
+            const int n = field.cellDeterminants(openvdb::Coord(i, j, k), dets);
+            for (int m = 0; m < n; ++m) {
+                const double det = dets[m];
+                s.min = std::min(s.min, det);
+                s.max = std::max(s.max, det);
+                ++s.simplices;
+                if (det < DET_LOW_THRESHOLD) ++s.belowThreshold;
+                if (det <= 0) ++s.nonPositive;
+            }
+        }
         perRow[r] = s;
     });
     total.min = INF_DET;

@@ -137,6 +137,37 @@ DeformationField::jacobianDeterminant(const openvdb::Vec3d& xWorld) const
     return A.det();
 }
 
+int
+DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) const
+{
+    ConstAccessor acc(mGrid->tree());
+    const int corners = 1 << mDim;
+    std::array<openvdb::Vec3d, 8> u;
+    for (int c = 0; c < corners; ++c) {
+        openvdb::Coord v = cell;
+        if (mDim == 2) v[2] = mSliceK;
+        for (int a = 0; a < mDim; ++a)
+            v[a] += (c >> a) & 1;
+        u[c] = openvdb::Vec3d(acc.getValue(v)) / mVoxelSize;
+    }
+    std::array<int, 3> order{{0, 1, 2}};
+    int count = 0;
+    do {
+        // Path cell -> cell + e_order[0] -> ...: column order[m] of D phi is e + du.
+        openvdb::Mat3d A = openvdb::Mat3d::identity();
+        int mask = 0;
+        for (int m = 0; m < mDim; ++m) {
+            const int next = mask | (1 << order[m]);
+            const openvdb::Vec3d du = u[next] - u[mask];
+            for (int r = 0; r < mDim; ++r)
+                A(r, order[m]) += du[r];
+            mask = next;
+        }
+        dets[count++] = mDim == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
+    } while (std::next_permutation(order.begin(), order.begin() + mDim));
+    return count;
+}
+
 DeformationField::InverseResult
 DeformationField::inverse(const openvdb::Vec3d& yWorld) const
 {

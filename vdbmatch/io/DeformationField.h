@@ -75,6 +75,12 @@ public:
     /// row and column are those of the identity). On a face between simplices, one of them.
     openvdb::Mat3d jacobian(const openvdb::Vec3d& xWorld) const;
 
+    /// det D phi on the d! Kuhn simplices of the voxel cell whose lowest corner is the voxel
+    /// @a cell (index space), in the order of std::next_permutation over the axes.
+    /// @param dets  room for d! values
+    /// @return d! (2 or 6)
+    int cellDeterminants(const openvdb::Coord& cell, double* dets) const;
+
     /// Result of an inverse evaluation.
     struct InverseResult
     {
