@@ -24,6 +24,8 @@ helpText()
     s += "  vdb_match energy SOURCE.vdb TARGET.vdb [options]\n";
     s += "  vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]\n";
     s += "  vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]\n";
+    s += "  vdb_match texture PHI.vdb --source M1 -o OUTDIR [options]\n";
+    s += "  vdb_match apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse] [options]\n";
     s += "  vdb_match --help | --version\n\n";
     s += "Commands:\n";
     s += wrapHelp("[match] SOURCE TARGET",
@@ -51,6 +53,11 @@ helpText()
                   "PNG pictures and summary.png. Options: --target M2, --pattern "
                   "checker|stripes|position, --bands N, --axis x|y|z, --size PX, --grid-cells N, "
                   "--quiet (docs/cli.md)");
+    s += wrapHelp("apply DEFORMATION.vdb INPUT",
+                  "carry a mesh (.obj .ply .stl: vertices and normals moved, everything else "
+                  "kept), a point file (.csv .xyz .txt) or the grids of a .vdb file (level sets "
+                  "rebuilt around the moved surface, other grids resampled) by phi, or by its "
+                  "exact inverse with --inverse; 'vdb_match apply --help' for its options");
     s += "\nOptions of match, as --name VALUE or --name=VALUE.\n";
     s += matchOptionHelp();
     s += "\nOptions of energy.\n";
@@ -99,13 +106,14 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
             return EXIT_OK;
         }
         const bool explicitCommand = command == "energy" || command == "match" ||
-                                     command == "consistency" || command == "slice";
+                                     command == "consistency" || command == "slice" ||
+                                     command == "apply" || command == "texture";
         const int first = explicitCommand ? 2 : 1;
         for (int i = first; i < argc; ++i) {
             const std::string arg = argv[i];
             if (arg == "--") break;
             if (arg == "-h" || arg == "--help") {
-                out << helpText();
+                out << (command == "apply" ? applyHelpText() : helpText());
                 return EXIT_OK;
             }
             if (arg == "--version") {
@@ -118,6 +126,7 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
         if (command == "consistency") return runConsistencyCommand(argc, argv, first, out, err);
         if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
         if (command == "texture") return runTextureCommand(argc, argv, 2, out, err);
+        if (command == "apply") return runApplyCommand(argc, argv, 2, out, err);
         return runMatchCommand(argc, argv, first, out, err);
     } catch (const UsageError& e) {
         return fail(EXIT_USAGE, e.what());

@@ -5,6 +5,7 @@
 /// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`,
 /// `vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]`,
 /// `vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]`,
+/// `vdb_match apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse] [options]`,
 /// `vdb_match --help`, `--version`.
 /// Results go to the output stream, progress and errors to the error stream (errors as one line
 /// `vdb_match: error: ...`). See docs/cli.md.
@@ -67,6 +68,10 @@ std::string matchOptionHelp();
 /// The grouped option lines of `consistency` and of `slice`, with their defaults.
 std::string consistencyOptionHelp();
 std::string sliceOptionHelp();
+/// The option lines of `apply`, with their defaults.
+std::string applyOptionHelp();
+/// The help page of `apply` (usage, directions, options).
+std::string applyHelpText();
 
 /// The preview path of a slice channel: OUT.exr -> OUT.<channel>.png.
 std::string slicePreviewPath(const std::string& exrPath, const std::string& channel);
@@ -81,6 +86,8 @@ int runMatchCommand(int argc, const char* const* argv, int first, std::ostream& 
 int runConsistencyCommand(int argc, const char* const* argv, int first, std::ostream& out,
                           std::ostream& err);
 int runSliceCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                    std::ostream& err);
+int runApplyCommand(int argc, const char* const* argv, int first, std::ostream& out,
                     std::ostream& err);
 int runTextureCommand(int argc, const char* const* argv, int first, std::ostream& out,
                       std::ostream& err);

@@ -92,14 +92,29 @@ domainJson(const eval::DomainError& e, const eval::VertexError& v, double scale)
            ", \"shape_max\": " + jsonNumber(v.max * scale) + "}";
 }
 
+/// @param extra  more members, each as ", \"key\": value"
 std::string
 inverseJson(const eval::ConsistencyReport& r, const eval::DomainError& e,
-            const eval::VertexError& v)
+            const eval::VertexError& v, const std::string& extra = std::string())
 {
     return "{\"world\": " + domainJson(e, v, 1.0) +
            ", \"relative\": " + domainJson(e, v, 1.0 / r.domainSize) +
            ", \"omega_points\": " + std::to_string(e.points) +
-           ", \"shape_vertices\": " + std::to_string(v.points) + "}";
+           ", \"shape_vertices\": " + std::to_string(v.points) + extra + "}";
+}
+
+/// phi^{-1} o phi - Id over Omega: no shape part.
+std::string
+roundTripJson(const eval::ConsistencyReport& r)
+{
+    const eval::DomainError& e = r.inverseRoundTripDomain;
+    auto norms = [&](double scale) {
+        return "{\"omega_l2\": " + jsonNumber(e.l2 * scale) +
+               ", \"omega_linf\": " + jsonNumber(e.linf * scale) + "}";
+    };
+    return "{\"world\": " + norms(1.0) + ", \"relative\": " + norms(1.0 / r.domainSize) +
+           ", \"omega_points\": " + std::to_string(e.points) +
+           ", \"failures\": " + std::to_string(r.inverseFailures) + "}";
 }
 
 std::string
@@ -138,6 +153,11 @@ printJson(std::ostream& out, const ConsistencyCliOptions& o, const eval::Consist
     out << "  \"distance_voxel\": " << jsonNumber(r.distanceVoxel) << ",\n";
     out << "  \"psi_phi\": " << inverseJson(r, r.psiPhiDomain, r.psiPhiShape) << ",\n";
     out << "  \"phi_psi\": " << inverseJson(r, r.phiPsiDomain, r.phiPsiShape) << ",\n";
+    out << "  \"inverse_round_trip\": " << roundTripJson(r) << ",\n";
+    out << "  \"psi_vs_inverse\": "
+        << inverseJson(r, r.psiVsInverseDomain, r.psiVsInverseShape,
+                       ", \"failures\": " + std::to_string(r.psiVsInverseFailures))
+        << ",\n";
     out << "  \"residual_phi\": " << residualJson(r, r.residualPhi) << ",\n";
     out << "  \"residual_psi\": " << residualJson(r, r.residualPsi) << ",\n";
     out << "  \"det_phi\": " << detJson(r.detPhi) << ",\n";
@@ -148,8 +168,11 @@ printJson(std::ostream& out, const ConsistencyCliOptions& o, const eval::Consist
 void
 printTable(std::ostream& out, const ConsistencyCliOptions& o, const eval::ConsistencyReport& r)
 {
+    /// Width of the label column.
+    constexpr std::size_t LABEL_WIDTH = 39;
     auto row = [&](const std::string& what, double world) {
-        out << "  " << what << std::string(what.size() < 36 ? 36 - what.size() : 1, ' ')
+        out << "  " << what
+            << std::string(what.size() < LABEL_WIDTH ? LABEL_WIDTH - what.size() : 1, ' ')
             << fixed("%11.4e", world) << "   " << fixed("%11.4e", r.relative(world)) << "\n";
     };
     auto det = [&](const std::string& name, const eval::JacobianStats& s) {
@@ -164,22 +187,32 @@ printTable(std::ostream& out, const ConsistencyCliOptions& o, const eval::Consis
     out << r.dim << "D, domain size " << formatNumber(r.domainSize)
         << " (world units), Omega sampled every " << fixed("%.4g", r.sampleSpacing) << " ("
         << r.psiPhiDomain.points << " points), distances at level " << r.distanceLevel << "\n\n";
-    out << "  " << std::string(36, ' ') << "      world   / domain size\n";
-    row("|psi(phi(x)) - x|  Omega  L2 (rms)", r.psiPhiDomain.l2);
-    row("                   Omega  Linf", r.psiPhiDomain.linf);
-    row("                   M1     mean", r.psiPhiShape.mean);
-    row("                   M1     max", r.psiPhiShape.max);
-    row("|phi(psi(y)) - y|  Omega  L2 (rms)", r.phiPsiDomain.l2);
-    row("                   Omega  Linf", r.phiPsiDomain.linf);
-    row("                   M2     mean", r.phiPsiShape.mean);
-    row("                   M2     max", r.phiPsiShape.max);
-    row("|d2(phi(x))| on M1        mean", r.residualPhi.mean);
-    row("                          max", r.residualPhi.max);
-    row("|d1(psi(y))| on M2        mean", r.residualPsi.mean);
-    row("                          max", r.residualPsi.max);
+    out << "  " << std::string(LABEL_WIDTH, ' ') << "      world   / domain size\n";
+    row("|psi(phi(x)) - x|     Omega  L2 (rms)", r.psiPhiDomain.l2);
+    row("                      Omega  Linf", r.psiPhiDomain.linf);
+    row("                      M1     mean", r.psiPhiShape.mean);
+    row("                      M1     max", r.psiPhiShape.max);
+    row("|phi(psi(y)) - y|     Omega  L2 (rms)", r.phiPsiDomain.l2);
+    row("                      Omega  Linf", r.phiPsiDomain.linf);
+    row("                      M2     mean", r.phiPsiShape.mean);
+    row("                      M2     max", r.phiPsiShape.max);
+    row("|phi^-1(phi(x)) - x|  Omega  L2 (rms)", r.inverseRoundTripDomain.l2);
+    row("                      Omega  Linf", r.inverseRoundTripDomain.linf);
+    row("|psi(y) - phi^-1(y)|  Omega  L2 (rms)", r.psiVsInverseDomain.l2);
+    row("                      Omega  Linf", r.psiVsInverseDomain.linf);
+    row("                      M2     mean", r.psiVsInverseShape.mean);
+    row("                      M2     max", r.psiVsInverseShape.max);
+    row("|d2(phi(x))| on M1           mean", r.residualPhi.mean);
+    row("                             max", r.residualPhi.max);
+    row("|d1(psi(y))| on M2           mean", r.residualPsi.mean);
+    row("                             max", r.residualPsi.max);
     out << "\n";
     det("det D phi", r.detPhi);
     det("det D psi", r.detPsi);
+    out << "  phi^-1 = exact inverse of phi; walks that failed (met det D phi <= 0): "
+        << r.inverseFailures << " of " << r.inverseRoundTripDomain.points << " (round trip), "
+        << r.psiVsInverseFailures << " of "
+        << r.psiVsInverseDomain.points + r.psiVsInverseShape.points << " (psi vs phi^-1)\n";
 }
 
 Shape

@@ -15,6 +15,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace vdbmatch {
@@ -172,48 +173,143 @@ jacobianStatsImpl(const DeformationField& field, bool threaded,
     return total;
 }
 
+/// The error at one sample point; @a found is false if an inverse walk did not end.
+struct PointError
+{
+    double error = 0;
+    bool found = true;
+};
+
+/// Warm start of the inverse walks along a row of sample points: the previous point's result.
+struct RowGuess
+{
+    openvdb::Vec3d x;
+    bool valid = false;
+};
+
+/// An error over the regular points x = min + i spacing of @a field's Omega, one row of points
+/// (along x) per task, rows combined in order.
+/// @param pointError  PointError(const openvdb::Vec3d& x, RowGuess& guess), called along each
+///                    row in order with a guess that starts invalid on every row
+/// @param failures    set to the number of points with found == false
+/// @throw openvdb::ValueError naming @a caller if spacing is not positive and finite
+template <typename PointFunc>
 DomainError
-compositionErrorImpl(const DeformationField& phi, const DeformationField& psi, double spacing,
-                     bool threaded, openvdb::util::NullInterrupter* interrupter, bool& complete)
+errorOverDomainImpl(const char* caller, const DeformationField& field, double spacing,
+                    bool threaded, openvdb::util::NullInterrupter* interrupter, bool& complete,
+                    std::size_t& failures, const PointFunc& pointError)
 {
     if (!(spacing > 0) || !std::isfinite(spacing)) {
         OPENVDB_THROW(openvdb::ValueError,
-                      "compositionErrorOverDomain: the spacing must be positive and finite");
+                      std::string(caller) + ": the spacing must be positive and finite");
     }
     /// Slack on the last point, relative to the spacing (float transforms).
     constexpr double LAST_POINT_SLACK = 1e-6;
-    const int dim = phi.dimension();
-    const openvdb::BBoxd& bounds = phi.worldBounds();
+    const int dim = field.dimension();
+    const openvdb::BBoxd& bounds = field.worldBounds();
     std::array<std::size_t, 3> n{{1, 1, 1}};
     for (int a = 0; a < dim; ++a) {
         n[a] = std::size_t(std::floor(bounds.extents()[a] / spacing + LAST_POINT_SLACK)) + 1;
     }
     const std::size_t rows = n[1] * n[2];
     std::vector<double> sum2(rows, 0.0), rowMax(rows, 0.0);
+    std::vector<std::size_t> rowFailures(rows, 0);
     complete = forEachChecked(rows, threaded, interrupter, [&](std::size_t r) {
         const std::size_t j = r % n[1], k = r / n[1];
         openvdb::Vec3d x = bounds.min();
         x[1] += double(j) * spacing;
         if (dim == 3) x[2] += double(k) * spacing;
         double s = 0, m = 0;
+        std::size_t bad = 0;
+        RowGuess guess;
         for (std::size_t i = 0; i < n[0]; ++i) {
             x[0] = bounds.min()[0] + double(i) * spacing;
-            const double e = (psi.apply(phi.apply(x)) - x).length();
-            s += e * e;
-            m = std::max(m, e);
+            const PointError e = pointError(x, guess);
+            s += e.error * e.error;
+            m = std::max(m, e.error);
+            if (!e.found) ++bad;
         }
         sum2[r] = s;
         rowMax[r] = m;
+        rowFailures[r] = bad;
     });
     DomainError out;
     out.points = rows * n[0];
     double s = 0;
+    failures = 0;
     for (std::size_t r = 0; r < rows; ++r) {
         s += sum2[r];
         out.linf = std::max(out.linf, rowMax[r]);
+        failures += rowFailures[r];
     }
     out.l2 = std::sqrt(s / double(out.points));
     return out;
+}
+
+DomainError
+compositionErrorImpl(const DeformationField& phi, const DeformationField& psi, double spacing,
+                     bool threaded, openvdb::util::NullInterrupter* interrupter, bool& complete)
+{
+    std::size_t failures = 0;
+    return errorOverDomainImpl("compositionErrorOverDomain", phi, spacing, threaded, interrupter,
+                               complete, failures, [&](const openvdb::Vec3d& x, RowGuess&) {
+                                   return PointError{(psi.apply(phi.apply(x)) - x).length(), true};
+                               });
+}
+
+/// |phi^{-1}(phi(x)) - x| over phi's Omega, each walk starting from the previous point's result
+/// (a walk along the image of one sample step: a real walk, not a start at the answer).
+DomainError
+inverseRoundTripImpl(const DeformationField& phi, double spacing, bool threaded,
+                     openvdb::util::NullInterrupter* interrupter, bool& complete,
+                     std::size_t& failures)
+{
+    return errorOverDomainImpl("inverseRoundTripOverDomain", phi, spacing, threaded, interrupter,
+                               complete, failures, [&](const openvdb::Vec3d& x, RowGuess& guess) {
+                                   const openvdb::Vec3d y = phi.apply(x);
+                                   const DeformationField::InverseResult r =
+                                       guess.valid ? phi.inverse(y, guess.x) : phi.inverse(y);
+                                   guess.x = r.x;
+                                   guess.valid = r.found;
+                                   return PointError{(r.x - x).length(), r.found};
+                               });
+}
+
+/// |psi(y) - phi^{-1}(y)| over psi's Omega, each walk starting from psi(y).
+DomainError
+psiVsInverseImpl(const DeformationField& phi, const DeformationField& psi, double spacing,
+                 bool threaded, openvdb::util::NullInterrupter* interrupter, bool& complete,
+                 std::size_t& failures)
+{
+    return errorOverDomainImpl("psiVsInverseOverDomain", psi, spacing, threaded, interrupter,
+                               complete, failures, [&](const openvdb::Vec3d& y, RowGuess&) {
+                                   const openvdb::Vec3d p = psi.apply(y);
+                                   const DeformationField::InverseResult r = phi.inverse(y, p);
+                                   return PointError{(p - r.x).length(), r.found};
+                               });
+}
+
+/// |psi(y) - phi^{-1}(y)| over the vertices y of a shape, each walk starting from psi(y).
+template <int D>
+bool
+psiVsInverseOnShape(const DeformationField& phi, const DeformationField& psi,
+                    const Surface<D>& shape, bool threaded,
+                    openvdb::util::NullInterrupter* interrupter, VertexError& out,
+                    std::size_t& failures)
+{
+    const double planeZ = psi.worldBounds().min()[2];
+    std::vector<double> values(shape.points.size(), 0.0);
+    std::vector<unsigned char> found(shape.points.size(), 1);
+    const bool complete = forEachChecked(values.size(), threaded, interrupter, [&](std::size_t i) {
+        const openvdb::Vec3d y = toWorld<D>(shape.points[i], planeZ);
+        const openvdb::Vec3d p = psi.apply(y);
+        const DeformationField::InverseResult r = phi.inverse(y, p);
+        values[i] = (p - r.x).length();
+        found[i] = r.found ? 1 : 0;
+    });
+    out = summarize(values);
+    failures = std::size_t(std::count(found.begin(), found.end(), 0));
+    return complete;
 }
 
 } // namespace
@@ -224,6 +320,29 @@ compositionErrorOverDomain(const DeformationField& phi, const DeformationField& 
 {
     bool complete = true;
     return compositionErrorImpl(phi, psi, spacing, threaded, interrupter, complete);
+}
+
+DomainError
+inverseRoundTripOverDomain(const DeformationField& phi, double spacing, std::size_t* failures,
+                           bool threaded, openvdb::util::NullInterrupter* interrupter)
+{
+    bool complete = true;
+    std::size_t bad = 0;
+    const DomainError e = inverseRoundTripImpl(phi, spacing, threaded, interrupter, complete, bad);
+    if (failures) *failures = bad;
+    return e;
+}
+
+DomainError
+psiVsInverseOverDomain(const DeformationField& phi, const DeformationField& psi, double spacing,
+                       std::size_t* failures, bool threaded,
+                       openvdb::util::NullInterrupter* interrupter)
+{
+    bool complete = true;
+    std::size_t bad = 0;
+    const DomainError e = psiVsInverseImpl(phi, psi, spacing, threaded, interrupter, complete, bad);
+    if (failures) *failures = bad;
+    return e;
 }
 
 JacobianStats
@@ -287,6 +406,18 @@ measureConsistency(const DeformationField& phi, const DeformationField& psi, con
     if (!run(compositionErrorOnShape(psi, phi, m2, threaded, interrupter, report.phiPsiShape))) {
         return report;
     }
+    report.inverseRoundTripDomain = inverseRoundTripImpl(
+        phi, report.sampleSpacing, threaded, interrupter, complete, report.inverseFailures);
+    if (!run(complete)) return report;
+    std::size_t domainFailures = 0, shapeFailures = 0;
+    report.psiVsInverseDomain = psiVsInverseImpl(phi, psi, report.sampleSpacing, threaded,
+                                                 interrupter, complete, domainFailures);
+    if (!run(complete)) return report;
+    if (!run(psiVsInverseOnShape(phi, psi, m2, threaded, interrupter, report.psiVsInverseShape,
+                                 shapeFailures))) {
+        return report;
+    }
+    report.psiVsInverseFailures = domainFailures + shapeFailures;
     report.detPhi = jacobianStatsImpl<D>(phi, threaded, interrupter, complete);
     if (!run(complete)) return report;
     report.detPsi = jacobianStatsImpl<D>(psi, threaded, interrupter, complete);

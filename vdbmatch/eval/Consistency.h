@@ -2,7 +2,8 @@
 /// @brief Inverse consistency and matching quality of a pair of deformations phi (M1 -> M2) and
 ///        psi (M2 -> M1), as in the paper's table tab:inverseError: |psi o phi - Id| and
 ///        |phi o psi - Id| over Omega and over the shapes, the residuals |d2 o phi| on M1 and
-///        |d1 o psi| on M2, and det D phi, det D psi statistics.
+///        |d1 o psi| on M2, det D phi, det D psi statistics, and psi compared with the exact
+///        inverse of phi.
 ///
 /// Every composition is the exact evaluation of the piecewise-linear maps stored in the grids
 /// (DeformationField: Kuhn simplices of the voxels, phi = Id outside Omega); no resampling.
@@ -22,10 +23,26 @@
 /// - det D phi over every Kuhn simplex of every voxel cell of phi's grid (d! per cell, cells
 ///   between active voxels of the grid's bounding box): min, max, and the number and fraction of
 ///   simplices with det < DET_LOW_THRESHOLD and with det <= 0 (inverted or flat); the same for
-///   psi.
+///   psi;
+/// - against the exact inverse phi^{-1} of phi (DeformationField::inverse: the walk through the
+///   deformed Kuhn simplices, exact up to rounding where det D phi > 0; issue 9):
+///   - the round trip e = phi^{-1}(phi(x)) - x over the sample points x of Omega_phi, each walk
+///     starting from the previous point's result in its row (the first point of a row: the
+///     fixed-point guess of DeformationField::inverse). It checks that the exact inverse is
+///     exact: about 1e-6 of the domain or less with single-precision grids;
+///   - e = psi(y) - phi^{-1}(y) over the sample points y of Omega_psi (the norms above) and over
+///     the vertices y of M2 (mean and max), each walk starting from psi(y): how far the reverse
+///     match is from the exact inverse of the forward one. Since psi(phi(x)) - x =
+///     (psi - phi^{-1})(phi(x)), |psi o phi - Id| is this same error sampled at the images
+///     phi(x) of the regular points (denser where phi compresses) and at phi(M1) instead of M2;
+///     phi(psi(y)) - y is about D phi (psi(y) - phi^{-1}(y)), the error after phi. Here it is
+///     sampled uniformly in M2's space and on M2 itself;
+///   - the number of walks that did not end (found == false: they met a simplex with
+///     det D phi <= 0, where phi has no inverse); such points count with the last point the walk
+///     reached.
 ///
-/// Determinism: sums are accumulated per row of sample points and added in row order, so the
-/// result does not depend on the number of threads.
+/// Determinism: sums are accumulated per row of sample points and added in row order, and the
+/// warm starts follow the rows, so the result does not depend on the number of threads.
 /// @see paper tab:inverseError, sec:numerics
 #pragma once
 
@@ -100,6 +117,13 @@ struct ConsistencyReport
     VertexError psiPhiShape;  ///< |psi(phi(x)) - x| over the vertices of M1
     DomainError phiPsiDomain; ///< |phi(psi(y)) - y| over Omega
     VertexError phiPsiShape;  ///< |phi(psi(y)) - y| over the vertices of M2
+    /// |phi^{-1}(phi(x)) - x| over Omega_phi, phi^{-1} the exact inverse (file comment)
+    DomainError inverseRoundTripDomain;
+    std::size_t inverseFailures = 0; ///< walks of inverseRoundTripDomain that did not end
+    DomainError psiVsInverseDomain;  ///< |psi(y) - phi^{-1}(y)| over Omega_psi
+    VertexError psiVsInverseShape;   ///< |psi(y) - phi^{-1}(y)| over the vertices of M2
+    /// Walks of psiVsInverseDomain and psiVsInverseShape that did not end.
+    std::size_t psiVsInverseFailures = 0;
     VertexError residualPhi;  ///< |d2(phi(x))| over the vertices of M1
     VertexError residualPsi;  ///< |d1(psi(y))| over the vertices of M2
     JacobianStats detPhi;     ///< det D phi
@@ -130,6 +154,24 @@ ConsistencyReport measureConsistency(const DeformationField& phi, const Deformat
 DomainError compositionErrorOverDomain(const DeformationField& phi, const DeformationField& psi,
                                        double spacing, bool threaded = true,
                                        openvdb::util::NullInterrupter* interrupter = nullptr);
+
+/// |phi^{-1}(phi(x)) - x| over the regular points of phi's Omega with the given world spacing,
+/// phi^{-1} the exact inverse warm-started along the rows (the round trip of
+/// measureConsistency, exposed for tests).
+/// @param failures  if not null, set to the number of walks that did not end
+/// @throw openvdb::ValueError if spacing is not positive and finite
+DomainError inverseRoundTripOverDomain(const DeformationField& phi, double spacing,
+                                       std::size_t* failures = nullptr, bool threaded = true,
+                                       openvdb::util::NullInterrupter* interrupter = nullptr);
+
+/// |psi(y) - phi^{-1}(y)| over the regular points of psi's Omega with the given world spacing,
+/// phi^{-1} the exact inverse, each walk starting from psi(y) (exposed for tests).
+/// @param failures  if not null, set to the number of walks that did not end
+/// @throw openvdb::ValueError if spacing is not positive and finite
+DomainError psiVsInverseOverDomain(const DeformationField& phi, const DeformationField& psi,
+                                   double spacing, std::size_t* failures = nullptr,
+                                   bool threaded = true,
+                                   openvdb::util::NullInterrupter* interrupter = nullptr);
 
 /// det D statistics over the Kuhn simplices of every voxel cell of @a field's grid.
 JacobianStats jacobianStats(const DeformationField& field, bool threaded = true,
