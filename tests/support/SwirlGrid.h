@@ -1,5 +1,5 @@
 /// @file SwirlGrid.h
-/// @brief A bijective test deformation grid with large displacements: a swirl.
+/// @brief Test deformation grids: a bijective swirl with large displacements, and an affine map.
 #pragma once
 
 #include <openvdb/openvdb.h>
@@ -39,6 +39,31 @@ swirlGrid(int dim, int level, double turn, double voxelWorld)
     }
     grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelWorld));
     grid->transform().postTranslate(openvdb::Vec3d(-3.0, 1.0, 2.0));
+    return grid;
+}
+
+/// A grid of 2^level + 1 nodes per axis (one layer in 2D), voxel @a voxelWorld, origin at the
+/// world origin, holding the affine map phi(x) = c + A (x - c) + b about the domain centre c.
+/// (Inside the node box phi is exactly affine; beyond it the grid's u falls to 0.)
+inline openvdb::Vec3SGrid::Ptr
+affineGrid(int dim, int level, const openvdb::Mat3d& A, const openvdb::Vec3d& b,
+           double voxelWorld)
+{
+    const int n = 1 << level;
+    auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(voxelWorld));
+    const openvdb::Vec3d c(0.5 * n * voxelWorld, 0.5 * n * voxelWorld,
+                           dim == 3 ? 0.5 * n * voxelWorld : 0.0);
+    auto acc = grid->getAccessor();
+    for (int k = 0; k <= (dim == 3 ? n : 0); ++k) {
+        for (int j = 0; j <= n; ++j) {
+            for (int i = 0; i <= n; ++i) {
+                const openvdb::Vec3d x = grid->indexToWorld(openvdb::Coord(i, j, k));
+                const openvdb::Vec3d u = A * (x - c) + b - (x - c);
+                acc.setValueOn(openvdb::Coord(i, j, k), openvdb::Vec3s(u));
+            }
+        }
+    }
     return grid;
 }
 

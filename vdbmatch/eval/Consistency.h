@@ -27,9 +27,9 @@
 /// - against the exact inverse phi^{-1} of phi (DeformationField::inverse: the walk through the
 ///   deformed Kuhn simplices, exact up to rounding where det D phi > 0; issue 9):
 ///   - the round trip e = phi^{-1}(phi(x)) - x over the sample points x of Omega_phi, each walk
-///     starting from the previous point's result in its row (the first point of a row: the
-///     fixed-point guess of DeformationField::inverse). It checks that the exact inverse is
-///     exact: about 1e-6 of the domain or less with single-precision grids;
+///     starting from the fixed-point guess of DeformationField::inverse(y) (what
+///     `vdb_match apply --inverse` does). It checks that the exact inverse is exact: about 1e-6
+///     of the domain or less with single-precision grids;
 ///   - e = psi(y) - phi^{-1}(y) over the sample points y of Omega_psi (the norms above) and over
 ///     the vertices y of M2 (mean and max), each walk starting from psi(y): how far the reverse
 ///     match is from the exact inverse of the forward one. Since psi(phi(x)) - x =
@@ -41,8 +41,9 @@
 ///     det D phi <= 0, where phi has no inverse); such points count with the last point the walk
 ///     reached.
 ///
-/// Determinism: sums are accumulated per row of sample points and added in row order, and the
-/// warm starts follow the rows, so the result does not depend on the number of threads.
+/// Determinism: sums are accumulated per row of sample points and added in row order, and each
+/// inverse walk starts from a guess that depends on its point only, so the result does not
+/// depend on the number of threads.
 /// @see paper tab:inverseError, sec:numerics
 #pragma once
 
@@ -156,8 +157,8 @@ DomainError compositionErrorOverDomain(const DeformationField& phi, const Deform
                                        openvdb::util::NullInterrupter* interrupter = nullptr);
 
 /// |phi^{-1}(phi(x)) - x| over the regular points of phi's Omega with the given world spacing,
-/// phi^{-1} the exact inverse warm-started along the rows (the round trip of
-/// measureConsistency, exposed for tests).
+/// phi^{-1} the exact inverse from its default guess (the round trip of measureConsistency,
+/// exposed for tests).
 /// @param failures  if not null, set to the number of walks that did not end
 /// @throw openvdb::ValueError if spacing is not positive and finite
 DomainError inverseRoundTripOverDomain(const DeformationField& phi, double spacing,
