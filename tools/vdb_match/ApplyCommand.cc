@@ -5,6 +5,7 @@
 #include "CliSupport.h"
 
 #include <vdbmatch/eval/ShapeDistance.h>
+#include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/InverseGrid.h>
 #include <vdbmatch/io/LevelSetIO.h>
@@ -90,7 +91,7 @@ extensionOf(const std::string& path)
     return ext;
 }
 
-enum class InputKind { Mesh, Points, Grids };
+enum class InputKind { Mesh, Points, Curves, Grids };
 
 InputKind
 inputKind(const std::string& path)
@@ -98,10 +99,11 @@ inputKind(const std::string& path)
     const std::string ext = extensionOf(path);
     if (ext == ".obj" || ext == ".ply" || ext == ".stl") return InputKind::Mesh;
     if (ext == ".csv" || ext == ".xyz" || ext == ".txt") return InputKind::Points;
+    if (ext == ".polyline") return InputKind::Curves;
     if (ext == ".vdb") return InputKind::Grids;
     throw UsageError("apply: cannot tell what '" + path +
                      "' holds from its extension (meshes: .obj .ply .stl; points: .csv .xyz "
-                     ".txt; grids: .vdb)");
+                     ".txt; 2D curves: .polyline; grids: .vdb)");
 }
 
 ApplyCliOptions
@@ -266,6 +268,31 @@ applyToPoints(const ApplyCliOptions& o, const DeformationField& phi,
 }
 
 int
+applyToCurves(const ApplyCliOptions& o, const DeformationField& phi,
+              const std::function<void(const std::string&)>& say, std::ostream& out)
+{
+    if (phi.dimension() != 2) {
+        OPENVDB_THROW(openvdb::ValueError, "'" << o.input
+                                               << "' holds 2D curves but the deformation is 3D");
+    }
+    say("reading " + o.input);
+    Surface<2> curves = readPolyline(o.input);
+    checkInterrupted();
+    std::vector<openvdb::Vec3d> points(curves.points.size());
+    for (std::size_t i = 0; i < points.size(); ++i)
+        points[i] = openvdb::Vec3d(curves.points[i][0], curves.points[i][1], 0.0);
+    const std::size_t failures = phi.mapPoints(points, o.inverse);
+    checkInverseFailures(failures, "curve vertices");
+    for (std::size_t i = 0; i < points.size(); ++i)
+        curves.points[i] = Vec<2>(points[i][0], points[i][1]);
+    checkInterrupted();
+    writeFileAtomically(o.output, [&](std::ostream& os) { writePolyline(os, curves); });
+    out << PROGRAM << ": wrote " << o.output << " (" << points.size()
+        << " curve vertices moved by " << mapName(o) << ")\n";
+    return EXIT_OK;
+}
+
+int
 applyToGrids(const ApplyCliOptions& o, const DeformationField& phi,
              const std::function<void(const std::string&)>& say, std::ostream& out)
 {
@@ -361,6 +388,8 @@ applyHelpText()
                   "kept byte for byte");
     s += wrapHelp("points .csv .xyz .txt",
                   "a header names the columns; x, y (and z) are moved, other columns kept");
+    s += wrapHelp("2D curves .polyline",
+                  "(with a 2D deformation) every vertex moved; written one block per curve");
     s += wrapHelp(".vdb grids",
                   "a level set is carried as its surface and rebuilt as a signed distance on "
                   "its own transform; any other float, double or vector grid f becomes "
@@ -403,6 +432,7 @@ runApplyCommand(int argc, const char* const* argv, int first, std::ostream& out,
     switch (inputKind(o.input)) {
     case InputKind::Mesh: return applyToMesh(o, phi, say, out);
     case InputKind::Points: return applyToPoints(o, phi, say, out);
+    case InputKind::Curves: return applyToCurves(o, phi, say, out);
     case InputKind::Grids: break;
     }
     return applyToGrids(o, phi, say, out);
