@@ -101,6 +101,20 @@ assert last["unknowns"] > 0 and last["nodes"] <= last["denseNodes"]
 assert len(r["levels"]) == r["parameters"]["maxLevel"] - r["parameters"]["minLevel"] + 1
 obj = open(out + "/deformed.obj").read()
 assert obj.count("\nv ") > 100
+# The exact inverse and the Jacobian, next to the deformation (docs/apply.md).
+assert r["outputs"] == ["deformation.vdb", "inverse.vdb", "jacobian.vdb", "deformed.vdb",
+                        "deformed.obj", "report.json"], r["outputs"]
+inv = vdb.read(out + "/inverse.vdb", "displacement")
+assert inv.metadata["is_inverse"] is True and not meta.get("is_inverse", False)
+assert inv.activeVoxelCount() == g.activeVoxelCount()
+assert max(abs(a - b) for a, b in zip(inv.transform.indexToWorld((3, 4, 5)),
+                                     g.transform.indexToWorld((3, 4, 5)))) < 1e-12
+assert r["inverse"]["failures"] == 0 and r["inverse"]["maxResidualWorld"] < 1e-9
+jac = vdb.read(out + "/jacobian.vdb", "det_jacobian")
+lo, hi = jac.evalMinMax()
+assert abs(jac.metadata["vdbmatch_det_min"] - r["result"]["minJacobian"]) < 1e-4, (jac.metadata, r["result"])
+# cell means (stored as float) lie between the simplex extremes
+assert jac.metadata["vdbmatch_det_min"] - 1e-6 <= lo <= 1.0 <= hi <= jac.metadata["vdbmatch_det_max"] + 1e-6, (lo, hi)
 PY
 ls -A "$SCRATCH/m3" | grep -q "\.tmp" && fail "temporary files left in the output directory"
 
@@ -119,6 +133,26 @@ r = json.load(open(out + "/report.json"))
 assert r["dimension"] == 2
 assert r["result"]["residual"]["meanUnit"] < r["levels"][-1]["h"] / 2
 PY
+    # --half, --no-inverse, --log-jacobian: smaller files, no inverse, the log grid.
+    check match-2d-half 0 'deformed.obj' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2h" --levels 4..6 --quiet --half --no-inverse --log-jacobian
+    count=$((count + 1))
+    if "$PYTHON" - "$SCRATCH/m2" "$SCRATCH/m2h" <<'PY'; then echo "ok   half-and-options"; else fail "half-and-options"; fi
+import json, os, sys
+import pyopenvdb as vdb
+full, half = sys.argv[1], sys.argv[2]
+assert not os.path.exists(half + "/inverse.vdb")
+r = json.load(open(half + "/report.json"))
+assert r["half"] is True and "inverse.vdb" not in r["outputs"] and "inverse" not in r
+assert os.path.getsize(half + "/deformation.vdb") < 0.8 * os.path.getsize(full + "/deformation.vdb")
+a = vdb.read(full + "/deformation.vdb", "displacement")
+b = vdb.read(half + "/deformation.vdb", "displacement").getConstAccessor()
+worst = max(max(abs(x - y) for x, y in zip(it.value, b.getValue(it.min))) for it in a.citerOnValues())
+h = a.transform.voxelSize()[0]
+assert worst < 1e-2 * h, (worst, h)
+lj = vdb.read(half + "/jacobian.vdb", "log_det_jacobian")
+lo, hi = lj.evalMinMax()
+assert lo < 0 < hi, (lo, hi)
+PY
 fi
 
 # ---------------------------------------------------------------- interrupted (5)
@@ -136,8 +170,9 @@ if [ "$code" -eq 5 ] && "$PYTHON" -c '
 import json, sys, pyopenvdb as vdb
 d = sys.argv[1]
 assert vdb.read(d + "/deformation.vdb", "displacement").metadata["is_interrupted"] is True
-assert json.load(open(d + "/report.json"))["status"] == "interrupted"
-' "$SCRATCH/int"; then
+r = json.load(open(d + "/report.json"))
+assert r["status"] == "interrupted" and "inverse.vdb" not in r["outputs"]
+' "$SCRATCH/int" && [ ! -e "$SCRATCH/int/inverse.vdb" ]; then
     echo "ok   interrupted"
 else
     fail "interrupted: exit code $code, expected 5 and outputs marked interrupted"

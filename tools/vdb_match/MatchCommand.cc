@@ -10,7 +10,10 @@
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/SurfaceExtraction.h>
 #include <vdbmatch/io/AtomicFile.h>
+#include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
+#include <vdbmatch/io/InverseGrid.h>
+#include <vdbmatch/io/JacobianGrid.h>
 #include <vdbmatch/io/LevelSetIO.h>
 #include <vdbmatch/io/MeshIO.h>
 #include <vdbmatch/io/ShapeIO.h>
@@ -57,6 +60,10 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
+    bool writeInverse = true;   ///< inverse.vdb
+    bool writeJacobian = true;  ///< jacobian.vdb
+    bool logJacobian = false;   ///< jacobian.vdb holds log det
+    bool half = false;          ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;
@@ -89,6 +96,19 @@ matchOptionTable()
          "node spacing 2^-L of deformation.vdb in the unit box (default: the finest level, "
          "which reproduces phi exactly)",
          [](O& o, const std::string& v) { o.deformationLevel = parseInt("--deformation-level", v); }},
+        {"--no-inverse", nullptr, "Input and output",
+         "do not write inverse.vdb (the exact inverse phi^-1 at every node)",
+         [](O& o, const std::string&) { o.writeInverse = false; }},
+        {"--no-jacobian", nullptr, "Input and output",
+         "do not write jacobian.vdb (det D phi per voxel cell)",
+         [](O& o, const std::string&) { o.writeJacobian = false; }},
+        {"--log-jacobian", nullptr, "Input and output",
+         "jacobian.vdb holds log det D phi (grid log_det_jacobian)",
+         [](O& o, const std::string&) { o.logJacobian = true; }},
+        {"--half", nullptr, "Input and output",
+         "store deformation.vdb and inverse.vdb in half precision (about half the size; "
+         "displacements rounded to 11 significant bits, docs/apply.md)",
+         [](O& o, const std::string&) { o.half = true; }},
         {"--min-level", "L", "Levels and domain",
          "first (coarsest) level, h = 2^-L (default 4)",
          [](O& o, const std::string& v) { o.minLevel = parseInt("--min-level", v); }},
@@ -391,10 +411,22 @@ inputJson(const Shape& in, std::size_t vertices, std::size_t elements)
            ", \"elements\": " + std::to_string(elements) + "}";
 }
 
+/// What was written besides deformation.vdb, for report.json.
+struct ExtraOutputs
+{
+    std::vector<std::string> files; ///< every file written, in order
+    bool inverse = false;
+    std::size_t inverseNodes = 0, inverseFailures = 0;
+    double inverseMaxResidual = 0, inverseSeconds = 0;
+    bool jacobian = false;
+    double detMin = 1, detMax = 1, jacobianSeconds = 0;
+};
+
 template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
-           const MatchResult<D>& r, const std::string& status, double writeSeconds)
+           const MatchResult<D>& r, const std::string& status, double writeSeconds,
+           const ExtraOutputs& extra)
 {
     const EnergyParameters& p = opts.multiscale.energy;
     std::ostringstream s;
@@ -479,8 +511,24 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
       << ", \"samples\": " << r.residual.samples << "}"
       << ", \"seconds\": {\"match\": " << jsonNumber(r.totalSeconds)
       << ", \"write\": " << jsonNumber(writeSeconds) << "}},\n";
-    s << "  \"outputs\": [\"deformation.vdb\", \"deformed.vdb\", \"deformed.obj\", "
-         "\"report.json\"]\n";
+    if (extra.inverse) {
+        s << "  \"inverse\": {\"nodes\": " << extra.inverseNodes
+          << ", \"failures\": " << extra.inverseFailures
+          << ", \"maxResidualWorld\": " << jsonNumber(extra.inverseMaxResidual)
+          << ", \"seconds\": " << jsonNumber(extra.inverseSeconds) << "},\n";
+    }
+    if (extra.jacobian) {
+        s << "  \"jacobian\": {\"grid\": "
+          << jsonString(o.logJacobian ? LOG_JACOBIAN_GRID_NAME : JACOBIAN_GRID_NAME)
+          << ", \"detMin\": " << jsonNumber(extra.detMin)
+          << ", \"detMax\": " << jsonNumber(extra.detMax)
+          << ", \"seconds\": " << jsonNumber(extra.jacobianSeconds) << "},\n";
+    }
+    s << "  \"half\": " << (o.half ? "true" : "false") << ",\n";
+    s << "  \"outputs\": [";
+    for (std::size_t i = 0; i < extra.files.size(); ++i)
+        s << (i ? ", " : "") << jsonString(extra.files[i]);
+    s << "]\n";
     s << "}\n";
     return s.str();
 }
@@ -615,20 +663,83 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformed->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
     deformed->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
 
+    // The exact inverse at every node and det D phi per cell, from the grid as written.
+    ExtraOutputs extra;
+    openvdb::Vec3SGrid::Ptr inverseGrid;
+    openvdb::FloatGrid::Ptr jacobianGrid;
+    if (!interrupted && (o.writeInverse || o.writeJacobian)) {
+        const DeformationField field(deformation);
+        if (o.writeInverse) {
+            progress.message("computing the exact inverse at " +
+                             std::to_string(deformation->activeVoxelCount()) + " nodes");
+            const Clock::time_point t0 = Clock::now();
+            const InverseGridResult inv = makeInverseGrid(field, true, &interrupter);
+            if (inv.grid) {
+                inverseGrid = inv.grid;
+                extra.inverse = true;
+                extra.inverseNodes = inv.nodes;
+                extra.inverseFailures = inv.failures;
+                extra.inverseMaxResidual = inv.maxResidual;
+                extra.inverseSeconds = secondsSince(t0);
+                inverseGrid->removeMeta("vdbmatch_inverse_max_residual");
+                inverseGrid->insertMeta("vdbmatch_inverse_max_residual",
+                                        openvdb::DoubleMetadata(inv.maxResidual));
+                if (inv.failures) {
+                    progress.message("warning: the inverse walk failed at " +
+                                     std::to_string(inv.failures) +
+                                     " nodes (det D phi <= 0); inverse.vdb is wrong there");
+                }
+            }
+        }
+        if (o.writeJacobian && !wasSignalled()) {
+            const Clock::time_point t0 = Clock::now();
+            jacobianGrid = makeJacobianGrid(field, o.logJacobian, true, &interrupter);
+            if (jacobianGrid) {
+                extra.jacobian = true;
+                extra.jacobianSeconds = secondsSince(t0);
+                extra.detMin = jacobianGrid->metaValue<double>("vdbmatch_det_min");
+                extra.detMax = jacobianGrid->metaValue<double>("vdbmatch_det_max");
+                jacobianGrid->insertMeta("vdbmatch_version",
+                                         openvdb::StringMetadata(VDBMATCH_VERSION));
+                jacobianGrid->insertMeta("vdbmatch_command",
+                                         openvdb::StringMetadata(o.commandLine));
+            }
+        }
+    }
+    if (o.half) {
+        deformation->setSaveFloatAsHalf(true);
+        if (inverseGrid) inverseGrid->setSaveFloatAsHalf(true);
+    }
+
     const std::string dir = o.outDir;
     openvdb::MetaMap fileMeta;
     fileMeta.insertMeta("creator",
                         openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
     writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
+    extra.files.push_back("deformation.vdb");
+    // A stale inverse or Jacobian of an earlier run must not sit next to this deformation.
+    for (const char* name : {"inverse.vdb", "jacobian.vdb"}) {
+        std::error_code removeError; // absent is fine
+        fs::remove(fs::path(dir) / name, removeError);
+    }
+    if (inverseGrid) {
+        writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid}, fileMeta);
+        extra.files.push_back("inverse.vdb");
+    }
+    if (jacobianGrid) {
+        writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid}, fileMeta);
+        extra.files.push_back("jacobian.vdb");
+    }
     writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
     writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
                         [&](std::ostream& os) { writeObj(os, result.deformedSource); });
+    extra.files.insert(extra.files.end(), {"deformed.vdb", "deformed.obj", "report.json"});
     const bool converged = last.status == solver::Status::Converged;
     const std::string status = interrupted ? "interrupted"
                                : converged ? "converged"
                                            : "not converged";
     const double writeSeconds = secondsSince(writeStart);
-    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds);
+    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds, extra);
     writeFileAtomically((fs::path(dir) / "report.json").string(),
                         [&](std::ostream& os) { os << report; });
 
@@ -638,8 +749,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
         << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
         << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n"
-        << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string() << ", deformed.vdb, "
-        << "deformed.obj, report.json\n";
+        << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
+    for (std::size_t i = 1; i < extra.files.size(); ++i)
+        out << ", " << extra.files[i];
+    out << "\n";
     out.flush();
     if (interrupted) return EXIT_INTERRUPTED;
     if (o.strict && !converged) return EXIT_NOT_CONVERGED;
