@@ -46,8 +46,7 @@ swirlGrid(int dim, int level, double turn, double voxelWorld)
 /// world origin, holding the affine map phi(x) = c + A (x - c) + b about the domain centre c.
 /// (Inside the node box phi is exactly affine; beyond it the grid's u falls to 0.)
 inline openvdb::Vec3SGrid::Ptr
-affineGrid(int dim, int level, const openvdb::Mat3d& A, const openvdb::Vec3d& b,
-           double voxelWorld)
+affineGrid(int dim, int level, const openvdb::Mat3d& A, const openvdb::Vec3d& b, double voxelWorld)
 {
     const int n = 1 << level;
     auto grid = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));

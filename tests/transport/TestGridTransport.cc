@@ -9,10 +9,9 @@
 #include <vdbmatch/geometry/SurfaceExtraction.h>
 #include <vdbmatch/transport/GridTransport.h>
 
+#include <gtest/gtest.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetSphere.h>
-
-#include <gtest/gtest.h>
 
 #include <cmath>
 
@@ -28,7 +27,7 @@ constexpr double VOXEL = 0.125; // deformation domain [0, 4]^3 at level 5
 Mat3d
 stretch()
 {
-    return Mat3d(1.15, 0.1, 0.0, //
+    return Mat3d(1.15, 0.1, 0.0,  //
                  0.0, 0.95, 0.05, //
                  0.0, 0.0, 1.05);
 }
@@ -166,8 +165,10 @@ TEST(GridTransport, SliceMovesInItsPlane)
         for (int i = -80; i <= 80; ++i) {
             const Vec3d x = grid->indexToWorld(openvdb::Coord(i, j, 3));
             const double d = Vec3d(x[0] - discCentre[0], x[1] - discCentre[1], 0).length() - 0.6;
-            if (std::abs(d) < 0.3) acc.setValueOn(openvdb::Coord(i, j, 3), float(d));
-            else acc.setValueOff(openvdb::Coord(i, j, 3), d < 0 ? -0.3f : 0.3f);
+            if (std::abs(d) < 0.3)
+                acc.setValueOn(openvdb::Coord(i, j, 3), float(d));
+            else
+                acc.setValueOff(openvdb::Coord(i, j, 3), d < 0 ? -0.3f : 0.3f);
         }
     const GridTransportResult r = transportGrid(*grid, phi, false);
     auto out = openvdb::gridPtrCast<openvdb::FloatGrid>(r.grid);
@@ -180,8 +181,8 @@ TEST(GridTransport, SliceMovesInItsPlane)
     for (const auto& p : curve.points) {
         // phi^-1 of the new curve lies on the disc's circle.
         const Vec3d x = phi.inverse(Vec3d(p[0], p[1], 0.3)).x;
-        worst = std::max(worst, std::abs(Vec3d(x[0] - discCentre[0], x[1] - discCentre[1], 0)
-                                             .length() - 0.6));
+        worst = std::max(
+            worst, std::abs(Vec3d(x[0] - discCentre[0], x[1] - discCentre[1], 0).length() - 0.6));
     }
     EXPECT_LT(worst, 0.02);
 

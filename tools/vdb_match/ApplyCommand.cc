@@ -128,8 +128,8 @@ parseApplyOptions(int argc, const char* const* argv, int first)
     }
     const InputKind kind = inputKind(o.input);
     if (extensionOf(o.output) != extensionOf(o.input)) {
-        throw UsageError("apply: the output must have the input's format (" +
-                         extensionOf(o.input) + "), got '" + o.output + "'");
+        throw UsageError("apply: the output must have the input's format (" + extensionOf(o.input) +
+                         "), got '" + o.output + "'");
     }
     if (o.attributes && (kind != InputKind::Mesh || extensionOf(o.input) != ".ply")) {
         throw UsageError("--attributes needs a PLY mesh input (OBJ, STL and point files have no "
@@ -155,8 +155,10 @@ requireFile(const std::string& path)
 {
     std::error_code ec;
     const auto status = fs::status(path, ec);
-    if (!fs::exists(status)) OPENVDB_THROW(openvdb::IoError, "file '" << path << "' does not exist");
-    if (fs::is_directory(status)) OPENVDB_THROW(openvdb::IoError, "'" << path << "' is a directory");
+    if (!fs::exists(status))
+        OPENVDB_THROW(openvdb::IoError, "file '" << path << "' does not exist");
+    if (fs::is_directory(status))
+        OPENVDB_THROW(openvdb::IoError, "'" << path << "' is a directory");
 }
 
 /// The signed distance of the --target shape, valid at any world point.
@@ -222,8 +224,8 @@ applyToMesh(const ApplyCliOptions& o, const DeformationField& phi,
     checkInverseFailures(r.inverseFailures, "vertices");
     checkInterrupted();
     mesh.write(o.output);
-    out << PROGRAM << ": wrote " << o.output << " (" << r.vertices << " vertices and "
-        << r.normals << " normals moved by " << mapName(o) << ", max displacement "
+    out << PROGRAM << ": wrote " << o.output << " (" << r.vertices << " vertices and " << r.normals
+        << " normals moved by " << mapName(o) << ", max displacement "
         << fixed("%.4g", r.maxDisplacement) << " world units";
     if (r.outsideDomain) out << ", " << r.outsideDomain << " outside the domain left in place";
     if (!r.added.empty()) {
@@ -272,8 +274,8 @@ applyToCurves(const ApplyCliOptions& o, const DeformationField& phi,
               const std::function<void(const std::string&)>& say, std::ostream& out)
 {
     if (phi.dimension() != 2) {
-        OPENVDB_THROW(openvdb::ValueError, "'" << o.input
-                                               << "' holds 2D curves but the deformation is 3D");
+        OPENVDB_THROW(openvdb::ValueError,
+                      "'" << o.input << "' holds 2D curves but the deformation is 3D");
     }
     say("reading " + o.input);
     Surface<2> curves = readPolyline(o.input);
@@ -287,8 +289,8 @@ applyToCurves(const ApplyCliOptions& o, const DeformationField& phi,
         curves.points[i] = Vec<2>(points[i][0], points[i][1]);
     checkInterrupted();
     writeFileAtomically(o.output, [&](std::ostream& os) { writePolyline(os, curves); });
-    out << PROGRAM << ": wrote " << o.output << " (" << points.size()
-        << " curve vertices moved by " << mapName(o) << ")\n";
+    out << PROGRAM << ": wrote " << o.output << " (" << points.size() << " curve vertices moved by "
+        << mapName(o) << ")\n";
     return EXIT_OK;
 }
 
@@ -430,10 +432,14 @@ runApplyCommand(int argc, const char* const* argv, int first, std::ostream& out,
     }
     checkInterrupted();
     switch (inputKind(o.input)) {
-    case InputKind::Mesh: return applyToMesh(o, phi, say, out);
-    case InputKind::Points: return applyToPoints(o, phi, say, out);
-    case InputKind::Curves: return applyToCurves(o, phi, say, out);
-    case InputKind::Grids: break;
+    case InputKind::Mesh:
+        return applyToMesh(o, phi, say, out);
+    case InputKind::Points:
+        return applyToPoints(o, phi, say, out);
+    case InputKind::Curves:
+        return applyToCurves(o, phi, say, out);
+    case InputKind::Grids:
+        break;
     }
     return applyToGrids(o, phi, say, out);
 }

@@ -60,10 +60,10 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
-    bool writeInverse = true;   ///< inverse.vdb
-    bool writeJacobian = true;  ///< jacobian.vdb
-    bool logJacobian = false;   ///< jacobian.vdb holds log det
-    bool half = false;          ///< half-float storage of the vector grids
+    bool writeInverse = true;  ///< inverse.vdb
+    bool writeJacobian = true; ///< jacobian.vdb
+    bool logJacobian = false;  ///< jacobian.vdb holds log det
+    bool half = false;         ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;

@@ -28,7 +28,8 @@ checkTransform(const openvdb::GridBase& grid)
 {
     const openvdb::math::Transform& xform = grid.transform();
     const openvdb::Vec3d v = xform.voxelSize();
-    const bool uniform = std::abs(v[0] - v[1]) <= 1e-6 * v[0] && std::abs(v[0] - v[2]) <= 1e-6 * v[0];
+    const bool uniform =
+        std::abs(v[0] - v[1]) <= 1e-6 * v[0] && std::abs(v[0] - v[2]) <= 1e-6 * v[0];
     if (!xform.isLinear() || !uniform || !(v[0] > 0)) {
         OPENVDB_THROW(openvdb::ValueError, "grid '" << grid.getName()
                                                     << "': the transform is not linear with "
@@ -39,8 +40,7 @@ checkTransform(const openvdb::GridBase& grid)
 /// Moves the points of @a surface by phi or phi^{-1}; returns the number of failed walks.
 template <int D>
 std::size_t
-moveSurface(Surface<D>& surface, const DeformationField& phi, bool inverse, bool threaded,
-            double z)
+moveSurface(Surface<D>& surface, const DeformationField& phi, bool inverse, bool threaded, double z)
 {
     std::vector<openvdb::Vec3d> points(surface.points.size());
     for (std::size_t i = 0; i < points.size(); ++i) {

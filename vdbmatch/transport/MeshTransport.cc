@@ -179,10 +179,10 @@ transportMesh(MeshDocument& mesh, const DeformationField& phi, const MeshTranspo
         });
         const auto fold = std::find(folded.begin(), folded.end(), char(1));
         if (fold != folded.end()) {
-            OPENVDB_THROW(openvdb::ValueError,
-                          "the deformation folds at vertex " << (fold - folded.begin())
-                                                             << " (det D phi <= 0): det_jacobian "
-                                                                "and area_stretch are undefined");
+            OPENVDB_THROW(openvdb::ValueError, "the deformation folds at vertex "
+                                                   << (fold - folded.begin())
+                                                   << " (det D phi <= 0): det_jacobian "
+                                                      "and area_stretch are undefined");
         }
         mesh.addVertexProperty(ATTRIBUTE_DET_JACOBIAN, std::move(det));
         mesh.addVertexProperty(ATTRIBUTE_AREA_STRETCH, std::move(stretch));

@@ -68,11 +68,11 @@ struct MeshTransportOptions
 struct MeshTransportResult
 {
     std::size_t vertices = 0;
-    std::size_t normals = 0;          ///< normals rewritten
-    std::size_t outsideDomain = 0;    ///< vertices outside Omega (left in place)
-    std::size_t inverseFailures = 0;  ///< inverse walks that did not end (DeformationField)
-    std::vector<std::string> added;   ///< names of the properties added, in order
-    double maxDisplacement = 0;       ///< max |x' - x|, world units
+    std::size_t normals = 0;         ///< normals rewritten
+    std::size_t outsideDomain = 0;   ///< vertices outside Omega (left in place)
+    std::size_t inverseFailures = 0; ///< inverse walks that did not end (DeformationField)
+    std::vector<std::string> added;  ///< names of the properties added, in order
+    double maxDisplacement = 0;      ///< max |x' - x|, world units
 };
 
 /// Moves the vertices and normals of @a mesh by phi or phi^{-1} (file comment), in place.
