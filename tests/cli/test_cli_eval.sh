@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # CLI tests of `vdb_match consistency` and `vdb_match slice`: the 2D figure pair matched both
-# ways at coarse levels, the consistency figures as JSON (keys, finite, small), the slice EXR
-# (channels via iinfo) and its PNG previews, and the error cases with their exit codes.
+# ways at coarse levels, the consistency figures as a table and as JSON (keys, finite, small,
+# the measures against the exact inverse of phi), the slice EXR (channels via iinfo) and its PNG
+# previews, and the error cases with their exit codes.
 # Usage: test_cli_eval.sh VDB_MATCH ASSETS_DIR
 set -uo pipefail
 
@@ -26,6 +27,14 @@ PSI="$SCRATCH/ba/deformation.vdb"
 # 2. consistency: table and JSON.
 check consistency-table 0 'psi\(phi\(x\)\) - x' '' -- consistency "$PHI" "$PSI" \
     --source "$FIGURE_A" --target "$FIGURE_B"
+count=$((count + 1))
+if grep -Fq 'phi^-1(phi(x)) - x' "$SCRATCH/out" && grep -Fq 'psi(y) - phi^-1(y)' "$SCRATCH/out" &&
+    grep -Eq 'walks that failed .*: 0 of [0-9]+ \(round trip\)' "$SCRATCH/out"; then
+    echo "ok   consistency-table-inverse"
+else
+    fail "consistency-table-inverse"
+    cat "$SCRATCH/out"
+fi
 check consistency-json 0 '"psi_phi"' '' -- consistency "$PHI" "$PSI" \
     --source "$FIGURE_A" --target "$FIGURE_B" --json --threads 2
 cp "$SCRATCH/out" "$SCRATCH/consistency.json"
@@ -46,6 +55,27 @@ for key in ("psi_phi", "phi_psi"):
     assert rel["shape_mean"] < 0.05, (key, rel)
     assert rel["omega_l2"] < 0.05, (key, rel)
     assert abs(r[key]["world"]["shape_mean"] / r["domain_size"] - rel["shape_mean"]) < 1e-12
+# Against the exact inverse phi^-1 of phi: the round trip is rounding error, psi's distance to
+# phi^-1 is of the order of |psi o phi - Id| (the same error at other points).
+rt = r["inverse_round_trip"]
+for space in ("world", "relative"):
+    for k in ("omega_l2", "omega_linf"):
+        v = rt[space][k]
+        assert isinstance(v, float) and math.isfinite(v) and v >= 0, ("round trip", space, k, v)
+assert rt["omega_points"] == r["psi_phi"]["omega_points"], rt
+assert rt["failures"] == 0, rt
+assert rt["relative"]["omega_linf"] < 1e-9, rt
+pv = r["psi_vs_inverse"]
+for space in ("world", "relative"):
+    for k in ("omega_l2", "omega_linf", "shape_mean", "shape_max"):
+        v = pv[space][k]
+        assert isinstance(v, float) and math.isfinite(v) and v >= 0, ("psi vs inverse", space, k, v)
+assert pv["omega_points"] == r["phi_psi"]["omega_points"], pv
+assert pv["shape_vertices"] == r["phi_psi"]["shape_vertices"], pv
+assert pv["failures"] == 0, pv
+assert 0 < pv["relative"]["shape_mean"] < 0.05, pv
+assert pv["relative"]["omega_l2"] < 0.05, pv
+assert abs(pv["world"]["shape_mean"] / r["domain_size"] - pv["relative"]["shape_mean"]) < 1e-12
 for key in ("residual_phi", "residual_psi"):
     for space in ("world", "relative"):
         for k in ("mean", "max"):
@@ -60,6 +90,8 @@ for key in ("det_phi", "det_psi"):
     assert 0 <= d["fraction_below_threshold"] <= 1
 print("psi_phi relative:", r["psi_phi"]["relative"])
 print("phi_psi relative:", r["phi_psi"]["relative"])
+print("inverse_round_trip relative:", rt["relative"])
+print("psi_vs_inverse relative:", pv["relative"])
 print("residual_phi relative:", r["residual_phi"]["relative"])
 print("det_phi:", r["det_phi"]["min"], r["det_phi"]["max"])
 PY

@@ -4,7 +4,6 @@
 #include <vdbmatch/io/DeformationIO.h>
 
 #include <openvdb/Exceptions.h>
-
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -199,6 +198,8 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
     // Steps allowed: a segment crosses O(its length in cells) simplices; 2^16 is far above any
     // walk from a guess inside the grid.
     constexpr int MAX_STEPS = 1 << 16;
+    // Relative rate below which a barycentric coordinate counts as constant along the walk.
+    constexpr double EXIT_TOLERANCE = 1e-10;
     ConstAccessor acc(mGrid->tree());
     const double toIndex = 1.0 / mVoxelSize;
     openvdb::Vec3d y = yIn;
@@ -234,8 +235,7 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
             for (int row = 0; row < mDim; ++row)
                 A(row, axes[m - 1]) += du[row];
         }
-        const double det =
-            mDim == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
+        const double det = mDim == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
         if (!(det > 0.0)) {
             result.found = false;
             result.x = x;
@@ -256,11 +256,17 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
         for (int m = 1; m < mDim; ++m)
             mu[m] = d[axes[m - 1]] - d[axes[m]];
         mu[mDim] = d[axes[mDim - 1]];
+        // A face whose coordinate decreases by less than EXIT_TOLERANCE |d| over the step is
+        // not an exit: d lies in that face and the rate is rounding (without this a walk along
+        // a face creeps forward by the nudge until it runs out of steps). Ignoring it moves the
+        // point at most EXIT_TOLERANCE |d| outside the simplex.
+        const double length = d.length();
         double s = 1.0;
         for (int m = 0; m <= mDim; ++m) {
-            if (mu[m] < 0.0) s = std::min(s, std::max(lambda[m], 0.0) / -mu[m]);
+            if (mu[m] < -EXIT_TOLERANCE * length) {
+                s = std::min(s, std::max(lambda[m], 0.0) / -mu[m]);
+            }
         }
-        const double length = d.length();
         if (s >= 1.0 - 1e-12 || length <= NUDGE) {
             // y is in this simplex, or within the nudge of x (a walk through a vertex or an
             // edge, where the exit test sees rounding): the affine inverse of this simplex,
@@ -283,8 +289,7 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
 }
 
 std::size_t
-DeformationField::mapPoints(std::vector<openvdb::Vec3d>& points, bool inverse,
-                            bool threaded) const
+DeformationField::mapPoints(std::vector<openvdb::Vec3d>& points, bool inverse, bool threaded) const
 {
     std::atomic<std::size_t> failed{0};
     auto body = [&](const tbb::blocked_range<std::size_t>& range) {
