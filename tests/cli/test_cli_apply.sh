@@ -142,8 +142,11 @@ check missing-z 3 '' "column 'z'" -- apply "$PHI3" "$SCRATCH/nz.csv" -o "$SCRATC
 check bool-grid 3 '' "grid 'mask' .* holds bool values" -- apply "$PHI3" "$SCRATCH/mask.vdb" -o "$SCRATCH/x.vdb" --quiet
 check no-such-grid 3 '' "no grid named 'nope'" -- apply "$PHI3" "$SCRATCH/fog.vdb" -o "$SCRATCH/x.vdb" --grid nope --quiet
 check curves-3d 3 '' 'deformation is 3D' -- apply "$PHI3" "$FIGURE_A" -o "$SCRATCH/x.polyline" --quiet
+check mesh-2d-deformation 3 '' 'the deformation is 2D .* but the mesh is 3D' -- apply "$PHI2" "$SCRATCH/cube.obj" -o "$SCRATCH/x.obj" --quiet
+check grid-3d-2d-deformation 3 '' 'is 3D but the deformation is 2D' -- apply "$PHI2" "$SPHERE" -o "$SCRATCH/x.vdb" --quiet
 check slice-3d 3 '' '2D slice' -- apply "$PHI3" "$ASSETS/figure_a_slice.vdb" -o "$SCRATCH/x.vdb" --quiet
 no_output invalid-no-output "$SCRATCH/x.vdb"
+no_output invalid-no-output-obj "$SCRATCH/x.obj"
 no_output invalid-no-output-csv "$SCRATCH/x.csv"
 
 # ---------------------------------------------------------------- level set: same as deformed.vdb
@@ -160,6 +163,19 @@ for it in a.citerOnValues():
         worst = max(worst, abs(it.value - v)); n += 1
 h = a.transform.voxelSize()[0]
 print("ok" if n > 100 and worst < 0.05 * h else f"max difference {worst} over {n} voxels (h = {h})")
+EOF
+
+# ---------------------------------------------------------------- mesh source: same as deformed.obj
+check match-mesh-source 0 '' '' -- "$SCRATCH/cube.obj" "$ELLIPSOID" -o "$SCRATCH/mc" --levels 3..4 --quiet
+check apply-mesh-source 0 '' '' -- apply "$SCRATCH/mc/deformation.vdb" "$SCRATCH/cube.obj" -o "$SCRATCH/cube_applied.obj" --quiet
+pycheck apply-equals-deformed-obj "$SCRATCH/cube_applied.obj" "$SCRATCH/mc/deformed.obj" <<'EOF'
+import sys, numpy as np
+def read(p):
+    return np.array([[float(t) for t in l.split()[1:4]] for l in open(p) if l.startswith("v ")])
+a, b = read(sys.argv[1]), read(sys.argv[2])
+# deformed.obj is phi in double; the grid stores single precision: agree to float rounding.
+err = np.abs(a - b).max() if a.shape == b.shape else float("inf")
+print("ok" if err < 1e-6 * max(1.0, np.abs(b).max()) else f"max difference {err} ({a.shape} vs {b.shape})")
 EOF
 
 # ---------------------------------------------------------------- quad OBJ: topology kept, round trip

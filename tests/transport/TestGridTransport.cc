@@ -14,6 +14,7 @@
 #include <openvdb/tools/LevelSetSphere.h>
 
 #include <cmath>
+#include <cstdio>
 
 using namespace vdbmatch;
 using namespace vdbmatch::test;
@@ -212,4 +213,49 @@ TEST(GridTransport, ResultDoesNotDependOnThreads)
         ASSERT_TRUE(bacc.isValueOn(v.getCoord()));
         ASSERT_EQ(*v, bacc.getValue(v.getCoord()));
     }
+}
+
+namespace {
+
+/// max |g - f| over the voxels of f where f > 0.05, after carrying a Gaussian blob f (voxel
+/// @a voxel) forward by phi and back by phi^-1.
+double
+blobRoundTripError(const DeformationField& phi, double voxel)
+{
+    const Vec3d c = phi.worldBounds().getCenter() + Vec3d(0.5, 0.0, 0.0);
+    auto f = openvdb::FloatGrid::create(0.0f);
+    f->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    f->setGridClass(openvdb::GRID_FOG_VOLUME);
+    const int r = int(std::ceil(1.2 / voxel));
+    const openvdb::Coord ci = openvdb::Coord::round(f->worldToIndex(c));
+    auto acc = f->getAccessor();
+    for (int k = -r; k <= r; ++k)
+        for (int j = -r; j <= r; ++j)
+            for (int i = -r; i <= r; ++i) {
+                const openvdb::Coord ijk = ci.offsetBy(i, j, k);
+                const double d2 = (f->indexToWorld(ijk) - c).lengthSqr();
+                acc.setValueOn(ijk, float(std::exp(-d2 / (2 * 0.3 * 0.3))));
+            }
+    const GridTransportResult forward = transportGrid(*f, phi, false);
+    const GridTransportResult back = transportGrid(*forward.grid, phi, true);
+    auto g = openvdb::gridPtrCast<openvdb::FloatGrid>(back.grid);
+    auto gacc = g->getConstAccessor();
+    double worst = 0;
+    for (auto v = f->cbeginValueOn(); v; ++v) {
+        if (*v < 0.05f) continue;
+        worst = std::max(worst, double(std::abs(gacc.getValue(v.getCoord()) - *v)));
+    }
+    return worst;
+}
+
+} // namespace
+
+TEST(GridTransport, DensityForwardAndBackConvergesWithTheVoxelSize)
+{
+    // g = f o phi^-1, then g o phi: f again, up to two trilinear resamplings, O(h^2) in f's voxel.
+    const DeformationField phi(swirlGrid(3, 5, 1.0, VOXEL));
+    const double coarse = blobRoundTripError(phi, 0.1);
+    const double fine = blobRoundTripError(phi, 0.05);
+    EXPECT_LT(coarse, 0.1);
+    EXPECT_LT(fine, coarse / 2.5) << "coarse " << coarse << " fine " << fine;
 }

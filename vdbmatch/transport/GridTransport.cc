@@ -227,6 +227,15 @@ transportGrid(const openvdb::GridBase& grid, const DeformationField& phi, bool i
                                                       "double, vec3s and vec3d grids)");
     }
     checkTransform(grid);
+    if (phi.dimension() == 2) {
+        const openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
+        if (box.min().z() != box.max().z()) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "grid '" << grid.getName()
+                                   << "' is 3D but the deformation is 2D; a 2D deformation "
+                                      "carries one-layer (slice) grids");
+        }
+    }
     if (const auto* fog = dynamic_cast<const openvdb::FloatGrid*>(&grid)) {
         if (grid.getGridClass() == openvdb::GRID_LEVEL_SET) {
             return transportLevelSet(*fog, phi, inverse, threaded);

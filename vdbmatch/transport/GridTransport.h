@@ -51,7 +51,8 @@ bool isTransportableGrid(const openvdb::GridBase& grid);
 /// @param interrupter  checked once per leaf; if it fires the result's grid is null
 /// @throw openvdb::TypeError naming the grid if its type is not supported
 /// @throw openvdb::ValueError naming the grid if its transform is not linear with uniform
-///        voxels, a level set has no zero crossing, or a 2D slice is given to a 3D deformation
+///        voxels, a level set has no zero crossing, a 2D slice is given to a 3D deformation, or
+///        a 3D grid (active voxels in more than one layer) to a 2D deformation
 GridTransportResult transportGrid(const openvdb::GridBase& grid, const DeformationField& phi,
                                   bool inverse, bool threaded = true,
                                   openvdb::util::NullInterrupter* interrupter = nullptr);

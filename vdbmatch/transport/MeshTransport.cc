@@ -15,6 +15,9 @@ namespace vdbmatch {
 
 namespace {
 
+/// How far (relative to Omega's diagonal) a vertex may lie from a 2D deformation's plane.
+constexpr double PLANE_TOLERANCE = 1e-6;
+
 Eigen::Matrix3d
 toEigen(const openvdb::Mat3d& A)
 {
@@ -116,6 +119,19 @@ transportMesh(MeshDocument& mesh, const DeformationField& phi, const MeshTranspo
         }
     }
 
+    if (phi.dimension() == 2) {
+        // A 2D deformation acts on its plane: a mesh (or OBJ curve) must lie in it.
+        const double z0 = phi.worldBounds().min()[2];
+        const double tolerance = PLANE_TOLERANCE * phi.worldBounds().extents().length();
+        for (std::size_t i = 0; i < n; ++i) {
+            if (std::abs(mesh.positions()[i][2] - z0) > tolerance) {
+                OPENVDB_THROW(openvdb::ValueError, "the deformation is 2D (the plane z = "
+                                                       << z0 << ") but the mesh is 3D (vertex " << i
+                                                       << " has z = " << mesh.positions()[i][2]
+                                                       << "); use a 3D deformation");
+            }
+        }
+    }
     MeshTransportResult result;
     result.vertices = n;
     const std::vector<openvdb::Vec3d> before = mesh.positions();

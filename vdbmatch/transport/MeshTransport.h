@@ -76,7 +76,8 @@ struct MeshTransportResult
 };
 
 /// Moves the vertices and normals of @a mesh by phi or phi^{-1} (file comment), in place.
-/// @throw openvdb::ValueError if attributes are requested and the mesh is not a PLY file, the
+/// @throw openvdb::ValueError if phi is 2D and a vertex does not lie in its plane (within 1e-6
+///        of Omega's diagonal), attributes are requested and the mesh is not a PLY file, the
 ///        properties already exist, or area_stretch has neither faces nor normals to use
 MeshTransportResult transportMesh(MeshDocument& mesh, const DeformationField& phi,
                                   const MeshTransportOptions& options = MeshTransportOptions());
