@@ -7,12 +7,11 @@
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
-#include <support/SwirlGrid.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
+#include <support/SwirlGrid.h>
 #include <vector>
 
 using namespace vdbmatch;
@@ -133,9 +132,8 @@ checkSwirlInverse(int dim)
     int longestWalk = 0;
     std::vector<openvdb::Vec3d> points;
     for (int k = 0; k < 3000; ++k) {
-        openvdb::Vec3d y = box.min() + (box.max() - box.min()) * openvdb::Vec3d(uniform(rng),
-                                                                                uniform(rng),
-                                                                                uniform(rng));
+        openvdb::Vec3d y = box.min() + (box.max() - box.min()) *
+                                           openvdb::Vec3d(uniform(rng), uniform(rng), uniform(rng));
         if (dim == 2) y[2] = box.min()[2];
         points.push_back(y);
         const DeformationField::InverseResult r = field.inverse(y);

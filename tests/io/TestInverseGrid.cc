@@ -3,11 +3,10 @@
 ///        them, is marked as an inverse, and does not depend on the thread count.
 #include <vdbmatch/io/InverseGrid.h>
 
-#include <support/SwirlGrid.h>
-
 #include <gtest/gtest.h>
 
 #include <random>
+#include <support/SwirlGrid.h>
 
 using namespace vdbmatch;
 

@@ -5,11 +5,10 @@
 #include <vdbmatch/eval/Consistency.h>
 #include <vdbmatch/io/JacobianGrid.h>
 
-#include <support/SwirlGrid.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <support/SwirlGrid.h>
 
 using namespace vdbmatch;
 

@@ -84,10 +84,10 @@ public:
     /// Result of an inverse evaluation.
     struct InverseResult
     {
-        openvdb::Vec3d x;     ///< phi^{-1}(y), world units
-        int simplices = 0;    ///< simplices visited by the walk
-        bool found = true;    ///< false: the walk met a simplex with det D phi <= 0 or ran out
-                              ///< of steps (x is then the last point reached)
+        openvdb::Vec3d x;  ///< phi^{-1}(y), world units
+        int simplices = 0; ///< simplices visited by the walk
+        bool found = true; ///< false: the walk met a simplex with det D phi <= 0 or ran out
+                           ///< of steps (x is then the last point reached)
     };
     /// Exact phi^{-1}(y) (file comment), starting from the guess @a guessWorld (the fixed point
     /// iterate x = y - u(x) if none is given). Outside Omega, phi^{-1}(y) = y.

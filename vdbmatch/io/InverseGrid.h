@@ -1,6 +1,7 @@
 /// @file InverseGrid.h
 /// @brief The inverse deformation phi^{-1} as an interchange grid: the displacement
-///        phi^{-1}(y) - y at every node of phi's grid, evaluated exactly (DeformationField::inverse).
+///        phi^{-1}(y) - y at every node of phi's grid, evaluated exactly
+///        (DeformationField::inverse).
 ///
 /// Same layout, transform, vector type and name ("displacement") as the deformation grid
 /// (DeformationIO.h), with the boolean metadata `is_inverse` set, so that a tool that reads

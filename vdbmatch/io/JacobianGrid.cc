@@ -50,7 +50,8 @@ makeJacobianGrid(const DeformationField& phi, bool logarithm, bool threaded,
                 }
                 const openvdb::Coord start(lo[0] + S * int(b % std::size_t(bx)),
                                            lo[1] + S * int((b / std::size_t(bx)) % std::size_t(by)),
-                                           lo[2] + S * int(b / (std::size_t(bx) * std::size_t(by))));
+                                           lo[2] +
+                                               S * int(b / (std::size_t(bx) * std::size_t(by))));
                 auto leaf = std::make_unique<LeafT>(start, background, false);
                 double dets[6];
                 const openvdb::Coord end(std::min(hi[0], start[0] + S - 1),
@@ -69,8 +70,8 @@ makeJacobianGrid(const DeformationField& phi, bool logarithm, bool threaded,
                             }
                             mean /= n;
                             if (logarithm && !(mean > 0)) folded[b] = 1;
-                            leaf->setValueOn(c, float(logarithm ? std::log(std::max(mean, 1e-300))
-                                                                : mean));
+                            leaf->setValueOn(
+                                c, float(logarithm ? std::log(std::max(mean, 1e-300)) : mean));
                         }
                     }
                 }
