@@ -103,15 +103,28 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: margin must be in [0, 0.5), got " << margin);
     }
-    if (!(refinementMarginCells >= 0) || !std::isfinite(refinementMarginCells)) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "MatchOptions: refinementMarginCells must be finite and >= 0, got "
-                          << refinementMarginCells);
+    if (!(refinementMarginCells >= 0 && refinementMarginCells <= MAX_REFINEMENT_MARGIN_CELLS)) {
+        OPENVDB_THROW(openvdb::ValueError, "MatchOptions: refinementMarginCells must be in [0, "
+                                               << MAX_REFINEMENT_MARGIN_CELLS << "], got "
+                                               << refinementMarginCells);
     }
     if (coarsestLevel > multiscale.minLevel) {
         OPENVDB_THROW(openvdb::ValueError, "MatchOptions: coarsestLevel ("
                                                << coarsestLevel << ") must not exceed minLevel ("
                                                << multiscale.minLevel << ")");
+    }
+}
+
+void
+MatchOptions::validate(int dim) const
+{
+    validate();
+    if (multiscale.maxLevel > maxMatchLevel(dim)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: the finest level is at most "
+                          << maxMatchLevel(dim) << " in " << dim << "D (got " << multiscale.maxLevel
+                          << "; memory grows " << (dim == 2 ? 2 : 4)
+                          << "x per level: level 8 of a 3D pair takes about 0.8 GB)");
     }
 }
 
@@ -177,7 +190,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
       openvdb::util::NullInterrupter* interrupter)
 {
     const Clock::time_point start = Clock::now();
-    optsIn.validate();
+    optsIn.validate(D);
     checkSurface(source, "source");
     checkSurface(target, "target");
     MatchOptions opts = optsIn;

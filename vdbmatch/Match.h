@@ -63,6 +63,20 @@ constexpr double DEFAULT_MATCH_METRIC_TOLERANCE = 1e-2;
 /// Default extra margin of the fine region, in cells of side h_l (see the file comment): the
 /// band moves by up to about one cell during a level's descent.
 constexpr double DEFAULT_REFINEMENT_MARGIN_CELLS = 1.0;
+/// Largest accepted margin: wider ones refine (nearly) all of Omega at the finest level.
+constexpr double MAX_REFINEMENT_MARGIN_CELLS = 64.0;
+
+/// Finest levels accepted by match(), checked before anything is allocated. Peak memory grows
+/// about 4x per level in 3D (0.8 GB at level 8 for the bundled starfish pair, so ~3 GB at 9) and
+/// 2x per level in 2D; the limits keep a match within a few GB.
+constexpr int MAX_MATCH_LEVEL_3D = 9;
+constexpr int MAX_MATCH_LEVEL_2D = 12;
+/// Largest finest level for dimension @a dim.
+inline int
+maxMatchLevel(int dim)
+{
+    return dim == 2 ? MAX_MATCH_LEVEL_2D : MAX_MATCH_LEVEL_3D;
+}
 
 struct MatchOptions
 {
@@ -83,6 +97,8 @@ struct MatchOptions
     static MatchOptions defaults(int dim);
     /// Throws openvdb::ValueError naming the first invalid field.
     void validate() const;
+    /// validate(), and the levels within 1..maxMatchLevel(dim).
+    void validate(int dim) const;
 };
 
 /// The lattice of one level, compared with the dense lattice of the same h.

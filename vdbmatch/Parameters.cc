@@ -61,9 +61,18 @@ EnergyParameters::validate() const
     nonNegative("c_mem", cMem);
     nonNegative("c_bend", cBend);
     nonNegative("c_vol", cVol);
-    if (!std::isfinite(q)) OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: q must be finite");
-    if (!std::isfinite(theta))
-        OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: theta must be finite");
+    auto inRange = [](const char* name, Real v, Real lo, Real hi) {
+        if (!(v >= lo && v <= hi))
+            OPENVDB_THROW(openvdb::ValueError, "EnergyParameters: " << name << " must be in [" << lo
+                                                                    << ", " << hi << "], got "
+                                                                    << v);
+    };
+    inRange("c_match", cMatch, 0, MAX_COEFFICIENT);
+    inRange("c_mem", cMem, 0, MAX_COEFFICIENT);
+    inRange("c_bend", cBend, 0, MAX_COEFFICIENT);
+    inRange("c_vol", cVol, 0, MAX_COEFFICIENT);
+    inRange("q", q, 0, MAX_EXPONENT);
+    inRange("theta", theta, 0, MAX_EXPONENT);
     if (!std::isfinite(tau) || tau <= 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "EnergyParameters: tau must be finite and > 0, got " << tau);

@@ -22,6 +22,13 @@ std::string toString(EnergyKind kind);
 /// Parses "symmetric" or "directional"; throws openvdb::ValueError otherwise.
 EnergyKind parseEnergyKind(const std::string& name);
 
+/// Largest energy coefficient (c_match, c_mem, c_bend, c_vol) accepted: the paper's are 0.2..4.1;
+/// far larger ones only overflow the energy.
+constexpr double MAX_COEFFICIENT = 1e6;
+/// Largest exponent q or theta accepted: the weights sigma^-q and sigma^theta with sigma = 2^-8
+/// already span 2^-64..2^64 at 8.
+constexpr double MAX_EXPONENT = 8.0;
+
 struct EnergyParameters
 {
     Real cMatch = 4.096; ///< c_match
@@ -41,7 +48,8 @@ struct EnergyParameters
     static EnergyParameters defaults(int dim);
 
     /// Throws openvdb::ValueError naming the first invalid field: coefficients must be finite
-    /// and >= 0, q finite, theta finite, tau > 0, sigmaFactor > 0.
+    /// in [0, MAX_COEFFICIENT], q and theta in [0, MAX_EXPONENT], tau > 0,
+    /// sigmaFactor > 0.
     void validate() const;
 };
 

@@ -69,7 +69,7 @@ check truncated 2 '' '' -- energy "$SPHERE" "$SCRATCH/truncated.vdb" --quiet
 check not-level-set 3 '' "is not a level set \(grid class 'fog volume'\)" -- energy "$SCRATCH/fog.vdb" "$ELLIPSOID" --quiet
 check several-grids 3 '' "several float grids \('inner' \(float\), 'surface' \(float\)\)" -- energy "$SCRATCH/two.vdb" "$ELLIPSOID" --quiet
 check missing-grid 3 '' "no grid named 'nothere'" -- energy "$SPHERE" "$ELLIPSOID" --grid nothere --quiet
-check level-range 3 '' 'level must be in \[1, 12\]' -- energy "$SPHERE" "$ELLIPSOID" --level 0 --quiet
+check level-range 3 '' 'level must be in \[1, 8\]' -- energy "$SPHERE" "$ELLIPSOID" --level 0 --quiet
 check parameter-range 3 '' 'c_mem must be finite and >= 0' -- energy "$SPHERE" "$ELLIPSOID" --c-mem -1 --quiet
 check margin-range 3 '' 'margin must be in' -- energy "$SPHERE" "$ELLIPSOID" --margin 0.5 --quiet
 

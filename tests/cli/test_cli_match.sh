@@ -54,6 +54,15 @@ check unknown-type 3 '' 'unknown file type' -- "$SCRATCH/shape.xyz" "$SPHERE" -o
 check dimension-mismatch 3 '' '2D shape but' -- "$FIGURE_A" "$SPHERE" -o "$SCRATCH/o" --quiet
 check margin-range 3 '' 'margin' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --margin 0.7 --quiet
 check parameter-range 3 '' 'c_mem' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --c-mem -1 --quiet
+# Resource-exhausting or meaningless options are refused before anything large is allocated.
+check levels-too-fine 3 '' 'finest level is at most 9 in 3D' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 12..12 --quiet
+check levels-0-20 3 '' 'levels must be in' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 0..20 --quiet
+check threads-huge 1 '' 'threads must be in 0..1024' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --threads 2147483647 --quiet
+check threads-10000 1 '' 'threads must be in 0..1024' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --threads 10000 --quiet
+check metric-tolerance 3 '' 'metric tolerance must be in' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --metric-tolerance -1 --quiet
+check q-range 3 '' 'q must be in \[0, 8\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --q -1000 --quiet
+check refine-margin-range 3 '' 'refinementMarginCells must be in' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --refine-margin 1e9 --quiet
+check c-match-range 3 '' 'c_match must be in' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --c-match 1e300 --quiet
 [ -e "$SCRATCH/o/deformation.vdb" ] && fail "an input error left outputs in $SCRATCH/o"
 
 # ---------------------------------------------------------------- 3D end to end (0)

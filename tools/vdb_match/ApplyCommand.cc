@@ -74,7 +74,7 @@ applyOptionTable()
         {"--grid", "NAME", "Input", ".vdb input: carry only this grid (default: every grid)",
          [](O& o, const std::string& v) { o.grid = v; }},
         {"--threads", "N", "Run", "worker threads (default: all cores)",
-         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+         [](O& o, const std::string& v) { o.threads = parseThreads(v); }},
         {"--quiet", nullptr, "Run", "no progress messages on stderr",
          [](O& o, const std::string&) { o.quiet = true; }},
     };
@@ -120,7 +120,6 @@ parseApplyOptions(int argc, const char* const* argv, int first)
     o.deformation = positional[0];
     o.input = positional[1];
     if (o.output.empty()) throw UsageError("apply: missing the output file: -o OUTPUT");
-    if (o.threads < 0 || o.threads > 4096) throw UsageError("--threads must be in 0..4096");
     if (extensionOf(o.deformation) != ".vdb") {
         throw UsageError("apply: the deformation must be a .vdb file (deformation.vdb of match), "
                          "got '" +

@@ -25,6 +25,17 @@ commandLine(int argc, const char* const* argv)
     return line;
 }
 
+int
+parseThreads(const std::string& text)
+{
+    const int n = parseInt("--threads", text);
+    if (n < 0 || n > MAX_THREADS) {
+        throw UsageError("--threads must be in 0.." + std::to_string(MAX_THREADS) +
+                         " (0: all cores), got " + text);
+    }
+    return n;
+}
+
 std::string
 formatNumber(double x)
 {

@@ -85,6 +85,11 @@ std::string commandLine(int argc, const char* const* argv);
 /// @throw UsageError if @a text is not one
 double parseDouble(const std::string& option, const std::string& text);
 int parseInt(const std::string& option, const std::string& text);
+/// Largest --threads accepted (0 = all cores); TBB allocates per requested thread.
+constexpr int MAX_THREADS = 1024;
+/// Parses --threads: an integer in [0, MAX_THREADS].
+/// @throw UsageError otherwise
+int parseThreads(const std::string& text);
 /// Shortest decimal form of x ("4.096").
 std::string formatNumber(double x);
 /// One help entry: the left column, then @a text wrapped at 100 columns.

@@ -57,7 +57,7 @@ consistencyOptionTable()
         {"--json", nullptr, "Output", "print one JSON object instead of the table",
          [](O& o, const std::string&) { o.json = true; }},
         {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
-         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+         [](O& o, const std::string& v) { o.threads = parseThreads(v); }},
     };
     // clang-format on
 }

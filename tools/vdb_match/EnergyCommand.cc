@@ -21,6 +21,9 @@ namespace cli {
 
 namespace {
 
+/// Finest --level of `energy`: its lattice is dense (8^8 cells = 100 M simplices at 8).
+constexpr int MAX_ENERGY_LEVEL = 8;
+
 /// The options of `energy`, in help order; help strings show the defaults of @a d.
 std::vector<Option<EnergyOptions>>
 energyOptionTable()
@@ -91,7 +94,7 @@ energyOptionTable()
         {"--quiet", nullptr, "Output", "no progress messages on stderr (errors are still printed)",
          [](EnergyOptions& o, const std::string&) { o.quiet = true; }},
         {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
-         [](EnergyOptions& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+         [](EnergyOptions& o, const std::string& v) { o.threads = parseThreads(v); }},
     };
     // clang-format on
 }
@@ -202,6 +205,12 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
     if (o.threads < 0) {
         OPENVDB_THROW(openvdb::ValueError,
                       "--threads must be >= 0, got " + std::to_string(o.threads));
+    }
+    if (o.level < 1 || o.level > MAX_ENERGY_LEVEL) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "--level must be in [1, " + std::to_string(MAX_ENERGY_LEVEL) +
+                          "] (energy evaluates a dense lattice of 6 * 8^level simplices), got " +
+                          std::to_string(o.level));
     }
     if (o.hessianSmoothing < 0) {
         OPENVDB_THROW(openvdb::ValueError, "--hessian-smoothing must be >= 0, got " +

@@ -223,7 +223,7 @@ matchOptionTable()
              std::to_string(d.progressEvery) + ")",
          [](O& o, const std::string& v) { o.progressEvery = parseInt("--progress-every", v); }},
         {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
-         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+         [](O& o, const std::string& v) { o.threads = parseThreads(v); }},
     };
     // clang-format on
 }

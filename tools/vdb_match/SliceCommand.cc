@@ -86,7 +86,7 @@ sliceOptionTable()
         {"--quiet", nullptr, "Execution", "do not list the files written",
          [](O& o, const std::string&) { o.quiet = true; }},
         {"--threads", "N", "Execution", "number of threads, 0 = all cores (default 0)",
-         [](O& o, const std::string& v) { o.threads = parseInt("--threads", v); }},
+         [](O& o, const std::string& v) { o.threads = parseThreads(v); }},
     };
     // clang-format on
 }

@@ -35,6 +35,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: toleranceCoarsening must be finite and >= 1, got "
                           << toleranceCoarsening);
+    if (!(metric.cgTolerance > 0 && metric.cgTolerance < 1))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: the metric tolerance must be in (0, 1), got "
+                          << metric.cgTolerance);
     energy.validate();
     descent.validate();
 }
