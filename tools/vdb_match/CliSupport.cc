@@ -146,51 +146,17 @@ secondsSince(Clock::time_point t0)
     return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
-std::string
-jsonString(const std::string& s)
-{
-    std::string out = "\"";
-    for (const char c : s) {
-        switch (c) {
-        case '"':
-            out += "\\\"";
-            break;
-        case '\\':
-            out += "\\\\";
-            break;
-        case '\n':
-            out += "\\n";
-            break;
-        case '\t':
-            out += "\\t";
-            break;
-        default:
-            if (static_cast<unsigned char>(c) < 0x20) {
-                char buf[8];
-                std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-                out += buf;
-            } else {
-                out += c;
-            }
-        }
-    }
-    return out + "\"";
-}
-
-/// A JSON number with 17 significant digits; null if not finite.
-std::string
-jsonNumber(double x)
-{
-    if (!std::isfinite(x)) return "null";
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%.17g", x);
-    return buf;
-}
-
-std::string
+Json
 jsonVec(const openvdb::Vec3d& v)
 {
-    return "[" + jsonNumber(v[0]) + ", " + jsonNumber(v[1]) + ", " + jsonNumber(v[2]) + "]";
+    return Json::array({v[0], v[1], v[2]});
+}
+
+std::string
+dumpJson(const Json& j)
+{
+    // Paths need not be UTF-8: replace invalid bytes instead of throwing.
+    return j.dump(2, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 std::string

@@ -11,6 +11,7 @@
 #include <atomic>
 #include <chrono>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -153,12 +154,13 @@ void checkInterrupted();
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0);
 
-/// A JSON string literal.
-std::string jsonString(const std::string& s);
-/// A JSON number with 17 significant digits; null if not finite.
-std::string jsonNumber(double x);
-/// [x, y, z] as JSON numbers.
-std::string jsonVec(const openvdb::Vec3d& v);
+/// JSON documents of the commands: nlohmann's ordered JSON keeps keys in insertion order; numbers
+/// are written in their shortest round-trip form, NaN and infinities as null.
+using Json = nlohmann::ordered_json;
+/// [x, y, z].
+Json jsonVec(const openvdb::Vec3d& v);
+/// The document indented by 2, with a final newline; invalid UTF-8 in strings is replaced.
+std::string dumpJson(const Json& j);
 /// printf-style formatting of one number.
 std::string fixed(const char* format, double x);
 /// One line: the exception message without OpenVDB's "XxxError: " prefix and newlines.

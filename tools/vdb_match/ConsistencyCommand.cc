@@ -83,86 +83,83 @@ parseConsistencyOptions(int argc, const char* const* argv, int first)
     return o;
 }
 
-std::string
+Json
 domainJson(const eval::DomainError& e, const eval::VertexError& v, double scale)
 {
-    return "{\"omega_l2\": " + jsonNumber(e.l2 * scale) +
-           ", \"omega_linf\": " + jsonNumber(e.linf * scale) +
-           ", \"shape_mean\": " + jsonNumber(v.mean * scale) +
-           ", \"shape_max\": " + jsonNumber(v.max * scale) + "}";
+    return Json{{"omega_l2", e.l2 * scale},
+                {"omega_linf", e.linf * scale},
+                {"shape_mean", v.mean * scale},
+                {"shape_max", v.max * scale}};
 }
 
-/// @param extra  more members, each as ", \"key\": value"
-std::string
+Json
 inverseJson(const eval::ConsistencyReport& r, const eval::DomainError& e,
-            const eval::VertexError& v, const std::string& extra = std::string())
+            const eval::VertexError& v)
 {
-    return "{\"world\": " + domainJson(e, v, 1.0) +
-           ", \"relative\": " + domainJson(e, v, 1.0 / r.domainSize) +
-           ", \"omega_points\": " + std::to_string(e.points) +
-           ", \"shape_vertices\": " + std::to_string(v.points) + extra + "}";
+    return Json{{"world", domainJson(e, v, 1.0)},
+                {"relative", domainJson(e, v, 1.0 / r.domainSize)},
+                {"omega_points", e.points},
+                {"shape_vertices", v.points}};
 }
 
 /// phi^{-1} o phi - Id over Omega: no shape part.
-std::string
+Json
 roundTripJson(const eval::ConsistencyReport& r)
 {
     const eval::DomainError& e = r.inverseRoundTripDomain;
     auto norms = [&](double scale) {
-        return "{\"omega_l2\": " + jsonNumber(e.l2 * scale) +
-               ", \"omega_linf\": " + jsonNumber(e.linf * scale) + "}";
+        return Json{{"omega_l2", e.l2 * scale}, {"omega_linf", e.linf * scale}};
     };
-    return "{\"world\": " + norms(1.0) + ", \"relative\": " + norms(1.0 / r.domainSize) +
-           ", \"omega_points\": " + std::to_string(e.points) +
-           ", \"failures\": " + std::to_string(r.inverseFailures) + "}";
+    return Json{{"world", norms(1.0)},
+                {"relative", norms(1.0 / r.domainSize)},
+                {"omega_points", e.points},
+                {"failures", r.inverseFailures}};
 }
 
-std::string
+Json
 residualJson(const eval::ConsistencyReport& r, const eval::VertexError& v)
 {
-    return "{\"world\": {\"mean\": " + jsonNumber(v.mean) + ", \"max\": " + jsonNumber(v.max) +
-           "}, \"relative\": {\"mean\": " + jsonNumber(r.relative(v.mean)) +
-           ", \"max\": " + jsonNumber(r.relative(v.max)) +
-           "}, \"vertices\": " + std::to_string(v.points) + "}";
+    return Json{{"world", Json{{"mean", v.mean}, {"max", v.max}}},
+                {"relative", Json{{"mean", r.relative(v.mean)}, {"max", r.relative(v.max)}}},
+                {"vertices", v.points}};
 }
 
-std::string
+Json
 detJson(const eval::JacobianStats& s)
 {
-    return "{\"min\": " + jsonNumber(s.min) + ", \"max\": " + jsonNumber(s.max) +
-           ", \"simplices\": " + std::to_string(s.simplices) +
-           ", \"threshold\": " + jsonNumber(eval::DET_LOW_THRESHOLD) +
-           ", \"below_threshold\": " + std::to_string(s.belowThreshold) +
-           ", \"fraction_below_threshold\": " + jsonNumber(s.fractionBelowThreshold()) +
-           ", \"non_positive\": " + std::to_string(s.nonPositive) +
-           ", \"fraction_non_positive\": " + jsonNumber(s.fractionNonPositive()) + "}";
+    return Json{{"min", s.min},
+                {"max", s.max},
+                {"simplices", s.simplices},
+                {"threshold", eval::DET_LOW_THRESHOLD},
+                {"below_threshold", s.belowThreshold},
+                {"fraction_below_threshold", s.fractionBelowThreshold()},
+                {"non_positive", s.nonPositive},
+                {"fraction_non_positive", s.fractionNonPositive()}};
 }
 
 void
 printJson(std::ostream& out, const ConsistencyCliOptions& o, const eval::ConsistencyReport& r)
 {
-    out << "{\n";
-    out << "  \"phi\": " << jsonString(o.phi) << ",\n";
-    out << "  \"psi\": " << jsonString(o.psi) << ",\n";
-    out << "  \"source\": " << jsonString(o.source) << ",\n";
-    out << "  \"target\": " << jsonString(o.target) << ",\n";
-    out << "  \"dimension\": " << r.dim << ",\n";
-    out << "  \"domain_size\": " << jsonNumber(r.domainSize) << ",\n";
-    out << "  \"sample_spacing\": " << jsonNumber(r.sampleSpacing) << ",\n";
-    out << "  \"distance_level\": " << r.distanceLevel << ",\n";
-    out << "  \"distance_voxel\": " << jsonNumber(r.distanceVoxel) << ",\n";
-    out << "  \"psi_phi\": " << inverseJson(r, r.psiPhiDomain, r.psiPhiShape) << ",\n";
-    out << "  \"phi_psi\": " << inverseJson(r, r.phiPsiDomain, r.phiPsiShape) << ",\n";
-    out << "  \"inverse_round_trip\": " << roundTripJson(r) << ",\n";
-    out << "  \"psi_vs_inverse\": "
-        << inverseJson(r, r.psiVsInverseDomain, r.psiVsInverseShape,
-                       ", \"failures\": " + std::to_string(r.psiVsInverseFailures))
-        << ",\n";
-    out << "  \"residual_phi\": " << residualJson(r, r.residualPhi) << ",\n";
-    out << "  \"residual_psi\": " << residualJson(r, r.residualPsi) << ",\n";
-    out << "  \"det_phi\": " << detJson(r.detPhi) << ",\n";
-    out << "  \"det_psi\": " << detJson(r.detPsi) << "\n";
-    out << "}\n";
+    Json j;
+    j["phi"] = o.phi;
+    j["psi"] = o.psi;
+    j["source"] = o.source;
+    j["target"] = o.target;
+    j["dimension"] = r.dim;
+    j["domain_size"] = r.domainSize;
+    j["sample_spacing"] = r.sampleSpacing;
+    j["distance_level"] = r.distanceLevel;
+    j["distance_voxel"] = r.distanceVoxel;
+    j["psi_phi"] = inverseJson(r, r.psiPhiDomain, r.psiPhiShape);
+    j["phi_psi"] = inverseJson(r, r.phiPsiDomain, r.phiPsiShape);
+    j["inverse_round_trip"] = roundTripJson(r);
+    j["psi_vs_inverse"] = inverseJson(r, r.psiVsInverseDomain, r.psiVsInverseShape);
+    j["psi_vs_inverse"]["failures"] = r.psiVsInverseFailures;
+    j["residual_phi"] = residualJson(r, r.residualPhi);
+    j["residual_psi"] = residualJson(r, r.residualPsi);
+    j["det_phi"] = detJson(r.detPhi);
+    j["det_psi"] = detJson(r.detPsi);
+    out << dumpJson(j);
 }
 
 void

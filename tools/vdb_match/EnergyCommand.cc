@@ -153,45 +153,46 @@ printJson(std::ostream& out, const EnergyOptions& o, const InputInfo (&in)[2],
 {
     const EnergyParameters& p = o.params;
     auto input = [](const InputInfo& i) {
-        return "{\"path\": " + jsonString(i.path) + ", \"grid\": " + jsonString(i.grid) +
-               ", \"worldVoxelSize\": " + jsonNumber(i.worldVoxelSize) +
-               ", \"activeVoxels\": " + std::to_string(i.activeVoxels) + "}";
+        return Json{{"path", i.path},
+                    {"grid", i.grid},
+                    {"worldVoxelSize", i.worldVoxelSize},
+                    {"activeVoxels", i.activeVoxels}};
     };
-    auto pair = [](const Real* v) {
-        return "[" + jsonNumber(v[0]) + ", " + jsonNumber(v[1]) + "]";
-    };
-    out << "{\n"
-        << "  \"command\": \"energy\",\n"
-        << "  \"version\": " << jsonString(VDBMATCH_VERSION) << ",\n"
-        << "  \"energy\": " << jsonString(toString(o.kind)) << ",\n"
-        << "  \"source\": " << input(in[0]) << ",\n"
-        << "  \"target\": " << input(in[1]) << ",\n"
-        << "  \"placement\": {\"worldOrigin\": " << jsonVec(placement.worldOrigin)
-        << ", \"scale\": " << jsonNumber(placement.scale)
-        << ", \"margin\": " << jsonNumber(placement.margin) << "},\n"
-        << "  \"parameters\": {\"cMatch\": " << jsonNumber(p.cMatch)
-        << ", \"cMem\": " << jsonNumber(p.cMem) << ", \"cBend\": " << jsonNumber(p.cBend)
-        << ", \"cVol\": " << jsonNumber(p.cVol) << ", \"q\": " << jsonNumber(p.q)
-        << ", \"theta\": " << jsonNumber(p.theta) << ", \"tau\": " << jsonNumber(p.tau)
-        << ", \"sigmaFactor\": " << jsonNumber(p.sigmaFactor)
-        << ", \"hessianSmoothing\": " << o.hessianSmoothing << "},\n"
-        << "  \"level\": " << o.level << ",\n"
-        << "  \"h\": " << jsonNumber(h) << ",\n"
-        << "  \"sigma\": " << jsonNumber(sigma) << ",\n"
-        << "  \"simplices\": " << simplices << ",\n"
-        << "  \"bandSimplices\": " << t.bandSimplices << ",\n"
-        << "  \"invertedSimplices\": " << t.invertedSimplices << ",\n"
-        << "  \"terms\": {\"match\": " << pair(t.match) << ", \"mem\": " << pair(t.mem)
-        << ", \"bend\": " << pair(t.bend) << ", \"vol\": " << pair(t.vol) << "},\n"
-        << "  \"total\": " << jsonNumber(total) << ",\n"
-        << "  \"timings\": {\"read\": " << jsonNumber(time.read)
-        << ", \"place\": " << jsonNumber(time.place)
-        << ", \"resample\": " << jsonNumber(time.resample)
-        << ", \"fields\": " << jsonNumber(time.fields)
-        << ", \"lattice\": " << jsonNumber(time.lattice)
-        << ", \"energy\": " << jsonNumber(time.energy) << ", \"total\": " << jsonNumber(time.total)
-        << "}\n"
-        << "}\n";
+    auto pair = [](const Real* v) { return Json::array({v[0], v[1]}); };
+    Json j;
+    j["command"] = "energy";
+    j["version"] = VDBMATCH_VERSION;
+    j["energy"] = toString(o.kind);
+    j["source"] = input(in[0]);
+    j["target"] = input(in[1]);
+    j["placement"] = Json{{"worldOrigin", jsonVec(placement.worldOrigin)},
+                          {"scale", placement.scale},
+                          {"margin", placement.margin}};
+    j["parameters"] = Json{{"cMatch", p.cMatch},
+                           {"cMem", p.cMem},
+                           {"cBend", p.cBend},
+                           {"cVol", p.cVol},
+                           {"q", p.q},
+                           {"theta", p.theta},
+                           {"tau", p.tau},
+                           {"sigmaFactor", p.sigmaFactor},
+                           {"hessianSmoothing", o.hessianSmoothing}};
+    j["level"] = o.level;
+    j["h"] = h;
+    j["sigma"] = sigma;
+    j["simplices"] = simplices;
+    j["bandSimplices"] = t.bandSimplices;
+    j["invertedSimplices"] = t.invertedSimplices;
+    j["terms"] = Json{{"match", pair(t.match)},
+                      {"mem", pair(t.mem)},
+                      {"bend", pair(t.bend)},
+                      {"vol", pair(t.vol)}};
+    j["total"] = total;
+    j["timings"] =
+        Json{{"read", time.read},     {"place", time.place},     {"resample", time.resample},
+             {"fields", time.fields}, {"lattice", time.lattice}, {"energy", time.energy},
+             {"total", time.total}};
+    out << dumpJson(j);
 }
 
 int

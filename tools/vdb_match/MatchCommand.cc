@@ -382,18 +382,20 @@ private:
 ////////////////////////////////////////////////////////////////////////////////
 // Outputs
 
-std::string
+Json
 pairJson(const Real* v)
 {
-    return "[" + jsonNumber(v[0]) + ", " + jsonNumber(v[1]) + "]";
+    return Json::array({v[0], v[1]});
 }
 
-std::string
+Json
 termsJson(const EnergyTerms& t)
 {
-    return "{\"match\": " + pairJson(t.match) + ", \"mem\": " + pairJson(t.mem) +
-           ", \"bend\": " + pairJson(t.bend) + ", \"vol\": " + pairJson(t.vol) +
-           ", \"total\": " + jsonNumber(t.total()) + "}";
+    return Json{{"match", pairJson(t.match)},
+                {"mem", pairJson(t.mem)},
+                {"bend", pairJson(t.bend)},
+                {"vol", pairJson(t.vol)},
+                {"total", t.total()}};
 }
 
 template <int D>
@@ -403,12 +405,15 @@ surfaceOf(const Shape& in)
     return in.get<D>();
 }
 
-std::string
-inputJson(const Shape& in, std::size_t vertices, std::size_t elements)
+template <int D>
+Json
+inputJson(const Shape& in)
 {
-    return "{\"path\": " + jsonString(in.path) + ", \"format\": " + jsonString(in.format) +
-           ", \"grid\": " + jsonString(in.grid) + ", \"vertices\": " + std::to_string(vertices) +
-           ", \"elements\": " + std::to_string(elements) + "}";
+    return Json{{"path", in.path},
+                {"format", in.format},
+                {"grid", in.grid},
+                {"vertices", surfaceOf<D>(in).points.size()},
+                {"elements", surfaceOf<D>(in).elements.size()}};
 }
 
 /// What was written besides deformation.vdb, for report.json.
@@ -422,6 +427,8 @@ struct ExtraOutputs
     double detMin = 1, detMax = 1, jacobianSeconds = 0;
 };
 
+/// report.json (docs/cli.md): keys in a fixed order, numbers in their shortest round-trip form,
+/// non-finite numbers as null.
 template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
@@ -429,108 +436,102 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
            const ExtraOutputs& extra)
 {
     const EnergyParameters& p = opts.multiscale.energy;
-    std::ostringstream s;
-    s << "{\n";
-    s << "  \"command\": \"match\",\n";
-    s << "  \"version\": " << jsonString(VDBMATCH_VERSION) << ",\n";
-    s << "  \"commandLine\": " << jsonString(o.commandLine) << ",\n";
-    s << "  \"status\": " << jsonString(status) << ",\n";
-    s << "  \"dimension\": " << D << ",\n";
-    s << "  \"source\": "
-      << inputJson(in[0], surfaceOf<D>(in[0]).points.size(), surfaceOf<D>(in[0]).elements.size())
-      << ",\n";
-    s << "  \"target\": "
-      << inputJson(in[1], surfaceOf<D>(in[1]).points.size(), surfaceOf<D>(in[1]).elements.size())
-      << ",\n";
-    s << "  \"placement\": {\"worldOrigin\": " << jsonVec(r.placement.worldOrigin)
-      << ", \"scale\": " << jsonNumber(r.placement.scale)
-      << ", \"margin\": " << jsonNumber(r.placement.margin) << "},\n";
-    s << "  \"parameters\": {\"energy\": " << jsonString(toString(opts.multiscale.kind))
-      << ", \"cMatch\": " << jsonNumber(p.cMatch) << ", \"cMem\": " << jsonNumber(p.cMem)
-      << ", \"cBend\": " << jsonNumber(p.cBend) << ", \"cVol\": " << jsonNumber(p.cVol)
-      << ", \"q\": " << jsonNumber(p.q) << ", \"theta\": " << jsonNumber(p.theta)
-      << ", \"tau\": " << jsonNumber(p.tau) << ", \"sigmaFactor\": " << jsonNumber(p.sigmaFactor)
-      << ", \"hessianSmoothing\": " << opts.sampler.fields.hessianSmoothing
-      << ", \"minLevel\": " << opts.multiscale.minLevel
-      << ", \"maxLevel\": " << opts.multiscale.maxLevel
-      << ", \"margin\": " << jsonNumber(opts.margin)
-      << ", \"refinementMarginCells\": " << jsonNumber(opts.refinementMarginCells)
-      << ", \"metricTauFactor\": " << jsonNumber(opts.multiscale.metricTauFactor)
-      << ", \"optimizer\": " << jsonString(solver::toString(opts.multiscale.descent.method))
-      << ", \"initialStep\": "
-      << jsonString(opts.multiscale.descent.initialStepFromSlope ? "slope" : "grow")
-      << ", \"metricTolerance\": " << jsonNumber(opts.multiscale.metric.cgTolerance)
-      << ", \"maxIterations\": " << opts.multiscale.descent.maxIterations
-      << ", \"energyTolerance\": " << jsonNumber(opts.multiscale.descent.energyTolerance)
-      << ", \"settleTolerance\": " << jsonNumber(opts.multiscale.descent.settleTolerance)
-      << ", \"toleranceCoarsening\": " << jsonNumber(opts.multiscale.toleranceCoarsening)
-      << ", \"relativeGradientTolerance\": "
-      << jsonNumber(opts.multiscale.descent.relativeGradientTolerance) << "},\n";
-    s << "  \"levels\": [";
-    for (std::size_t i = 0; i < r.levels.size(); ++i) {
-        const LevelSummary& l = r.levels[i];
+    const solver::DescentOptions& descent = opts.multiscale.descent;
+    Json j;
+    j["command"] = "match";
+    j["version"] = VDBMATCH_VERSION;
+    j["commandLine"] = o.commandLine;
+    j["status"] = status;
+    j["dimension"] = D;
+    j["source"] = inputJson<D>(in[0]);
+    j["target"] = inputJson<D>(in[1]);
+    j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
+                          {"scale", r.placement.scale},
+                          {"margin", r.placement.margin}};
+    j["parameters"] = Json{{"energy", toString(opts.multiscale.kind)},
+                           {"cMatch", p.cMatch},
+                           {"cMem", p.cMem},
+                           {"cBend", p.cBend},
+                           {"cVol", p.cVol},
+                           {"q", p.q},
+                           {"theta", p.theta},
+                           {"tau", p.tau},
+                           {"sigmaFactor", p.sigmaFactor},
+                           {"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
+                           {"minLevel", opts.multiscale.minLevel},
+                           {"maxLevel", opts.multiscale.maxLevel},
+                           {"margin", opts.margin},
+                           {"refinementMarginCells", opts.refinementMarginCells},
+                           {"metricTauFactor", opts.multiscale.metricTauFactor},
+                           {"optimizer", solver::toString(descent.method)},
+                           {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
+                           {"metricTolerance", opts.multiscale.metric.cgTolerance},
+                           {"maxIterations", descent.maxIterations},
+                           {"energyTolerance", descent.energyTolerance},
+                           {"settleTolerance", descent.settleTolerance},
+                           {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
+                           {"relativeGradientTolerance", descent.relativeGradientTolerance}};
+    Json levels = Json::array();
+    for (const LevelSummary& l : r.levels) {
         const solver::Report& rep = l.report;
         const double h = std::ldexp(1.0, -l.level);
-        s << (i ? ",\n" : "\n") << "    {\"level\": " << l.level << ", \"h\": " << jsonNumber(h)
-          << ", \"sigma\": " << jsonNumber(p.sigmaFactor * h) << ", \"cells\": " << l.lattice.cells
-          << ", \"simplices\": " << l.lattice.simplices << ", \"nodes\": " << l.lattice.nodes
-          << ", \"unknowns\": " << l.lattice.unknowns
-          << ", \"hangingNodes\": " << l.lattice.hangingNodes
-          << ", \"denseNodes\": " << l.lattice.denseNodes << ", \"nodeFractionOfDense\": "
-          << jsonNumber(l.lattice.denseNodes ? double(l.lattice.nodes) / l.lattice.denseNodes : 0)
-          << ", \"cellsPerSize\": [";
-        for (std::size_t k = 0; k < l.lattice.cellsPerLog2Size.size(); ++k) {
-            s << (k ? ", " : "") << l.lattice.cellsPerLog2Size[k];
-        }
-        s << "], \"status\": " << jsonString(solver::toString(rep.status))
-          << ", \"convergedBy\": " << jsonString(solver::toString(rep.convergedBy))
-          << ", \"iterations\": " << rep.iterations
-          << ", \"energyEvaluations\": " << rep.energyEvaluations
-          << ", \"gradientEvaluations\": " << rep.gradientEvaluations
-          << ", \"metricIterations\": " << rep.metricIterations
-          << ", \"restarts\": " << rep.restarts
-          << ", \"initialEnergy\": " << jsonNumber(rep.initialEnergy)
-          << ", \"energy\": " << jsonNumber(rep.energy) << ", \"terms\": " << termsJson(rep.terms)
-          << ", \"gradNorm\": " << jsonNumber(rep.gradNorm)
-          << ", \"minJacobian\": " << jsonNumber(rep.minJacobian)
-          << ", \"bandSimplices\": " << rep.terms.bandSimplices
-          << ", \"coarseBandSimplices\": " << rep.terms.coarseBandSimplices
-          << ", \"seconds\": {\"fields\": " << jsonNumber(l.fieldSeconds)
-          << ", \"lattice\": " << jsonNumber(l.latticeSeconds)
-          << ", \"descent\": " << jsonNumber(rep.elapsedSeconds) << "}}";
+        levels.push_back(Json{
+            {"level", l.level},
+            {"h", h},
+            {"sigma", p.sigmaFactor * h},
+            {"cells", l.lattice.cells},
+            {"simplices", l.lattice.simplices},
+            {"nodes", l.lattice.nodes},
+            {"unknowns", l.lattice.unknowns},
+            {"hangingNodes", l.lattice.hangingNodes},
+            {"denseNodes", l.lattice.denseNodes},
+            {"nodeFractionOfDense",
+             l.lattice.denseNodes ? double(l.lattice.nodes) / double(l.lattice.denseNodes) : 0.0},
+            {"cellsPerSize", l.lattice.cellsPerLog2Size},
+            {"status", solver::toString(rep.status)},
+            {"convergedBy", solver::toString(rep.convergedBy)},
+            {"iterations", rep.iterations},
+            {"energyEvaluations", rep.energyEvaluations},
+            {"gradientEvaluations", rep.gradientEvaluations},
+            {"metricIterations", rep.metricIterations},
+            {"restarts", rep.restarts},
+            {"initialEnergy", rep.initialEnergy},
+            {"energy", rep.energy},
+            {"terms", termsJson(rep.terms)},
+            {"gradNorm", rep.gradNorm},
+            {"minJacobian", rep.minJacobian},
+            {"bandSimplices", rep.terms.bandSimplices},
+            {"coarseBandSimplices", rep.terms.coarseBandSimplices},
+            {"seconds", Json{{"fields", l.fieldSeconds},
+                             {"lattice", l.latticeSeconds},
+                             {"descent", rep.elapsedSeconds}}}});
     }
-    s << "\n  ],\n";
+    j["levels"] = levels;
     const solver::Report* last = r.levels.empty() ? nullptr : &r.levels.back().report;
-    s << "  \"result\": {\"energy\": " << jsonNumber(last ? last->energy : INF)
-      << ", \"terms\": " << termsJson(last ? last->terms : EnergyTerms())
-      << ", \"minJacobian\": " << jsonNumber(r.minJacobian)
-      << ", \"residual\": {\"meanWorld\": " << jsonNumber(r.residual.meanWorld)
-      << ", \"maxWorld\": " << jsonNumber(r.residual.maxWorld)
-      << ", \"meanUnit\": " << jsonNumber(r.residual.meanUnit)
-      << ", \"maxUnit\": " << jsonNumber(r.residual.maxUnit)
-      << ", \"samples\": " << r.residual.samples << "}"
-      << ", \"seconds\": {\"match\": " << jsonNumber(r.totalSeconds)
-      << ", \"write\": " << jsonNumber(writeSeconds) << "}},\n";
+    j["result"] = Json{{"energy", last ? last->energy : INF},
+                       {"terms", termsJson(last ? last->terms : EnergyTerms())},
+                       {"minJacobian", r.minJacobian},
+                       {"residual", Json{{"meanWorld", r.residual.meanWorld},
+                                         {"maxWorld", r.residual.maxWorld},
+                                         {"meanUnit", r.residual.meanUnit},
+                                         {"maxUnit", r.residual.maxUnit},
+                                         {"samples", r.residual.samples}}},
+                       {"seconds", Json{{"match", r.totalSeconds}, {"write", writeSeconds}}}};
     if (extra.inverse) {
-        s << "  \"inverse\": {\"nodes\": " << extra.inverseNodes
-          << ", \"failures\": " << extra.inverseFailures
-          << ", \"maxResidualWorld\": " << jsonNumber(extra.inverseMaxResidual)
-          << ", \"seconds\": " << jsonNumber(extra.inverseSeconds) << "},\n";
+        j["inverse"] = Json{{"nodes", extra.inverseNodes},
+                            {"failures", extra.inverseFailures},
+                            {"maxResidualWorld", extra.inverseMaxResidual},
+                            {"seconds", extra.inverseSeconds}};
     }
     if (extra.jacobian) {
-        s << "  \"jacobian\": {\"grid\": "
-          << jsonString(o.logJacobian ? LOG_JACOBIAN_GRID_NAME : JACOBIAN_GRID_NAME)
-          << ", \"detMin\": " << jsonNumber(extra.detMin)
-          << ", \"detMax\": " << jsonNumber(extra.detMax)
-          << ", \"seconds\": " << jsonNumber(extra.jacobianSeconds) << "},\n";
+        j["jacobian"] = Json{{"grid", o.logJacobian ? LOG_JACOBIAN_GRID_NAME : JACOBIAN_GRID_NAME},
+                             {"detMin", extra.detMin},
+                             {"detMax", extra.detMax},
+                             {"seconds", extra.jacobianSeconds}};
     }
-    s << "  \"half\": " << (o.half ? "true" : "false") << ",\n";
-    s << "  \"outputs\": [";
-    for (std::size_t i = 0; i < extra.files.size(); ++i)
-        s << (i ? ", " : "") << jsonString(extra.files[i]);
-    s << "]\n";
-    s << "}\n";
-    return s.str();
+    j["half"] = o.half;
+    j["outputs"] = extra.files;
+    return dumpJson(j);
 }
 
 template <int D>
