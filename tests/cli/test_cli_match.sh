@@ -127,6 +127,31 @@ assert jac.metadata["vdbmatch_det_min"] - 1e-6 <= lo <= 1.0 <= hi <= jac.metadat
 PY
 ls -A "$SCRATCH/m3" | grep -q "\.tmp" && fail "temporary files left in the output directory"
 
+# ---------------------------------------------------------------- --config: report.json reproduces its run
+check config-reproduces 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3c" --config "$SCRATCH/m3/report.json" --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/m3c/report.json" <<'PY'; then echo "ok   config-same-result"; else fail "config-same-result"; fi
+import json, sys
+a, b = (json.load(open(p)) for p in sys.argv[1:])
+assert a["parameters"] == b["parameters"], (a["parameters"], b["parameters"])
+assert a["result"]["energy"] == b["result"]["energy"], (a["result"]["energy"], b["result"]["energy"])
+PY
+printf '{"cMatch": 2, "minLevel": 3, "maxLevel": 3}\n' >"$SCRATCH/params.json"
+printf '{"cMatch": 2, "levelz": 3}\n' >"$SCRATCH/typo.json"
+printf '{"cMatch": "x"}\n' >"$SCRATCH/badvalue.json"
+printf '[1, 2]\n' >"$SCRATCH/array.json"
+check config-overridden 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3o" --config "$SCRATCH/params.json" --c-match 3 --quiet
+count=$((count + 1))
+if grep -q '"cMatch": 3' "$SCRATCH/m3o/report.json" && grep -q '"maxLevel": 3' "$SCRATCH/m3o/report.json"; then
+    echo "ok   config-command-line-wins"
+else
+    fail "config-command-line-wins"
+fi
+check config-unknown-key 3 '' "unknown key 'levelz'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/typo.json" --quiet
+check config-bad-value 1 '' "key 'cMatch': --c-match expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/badvalue.json" --quiet
+check config-not-object 3 '' 'not a JSON object' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/array.json" --quiet
+check config-missing 2 '' 'cannot read' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/none.json" --quiet
+
 # ---------------------------------------------------------------- 2D end to end (0)
 if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then
     check match-2d 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2" --levels 4..6 --quiet

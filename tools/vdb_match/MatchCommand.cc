@@ -25,6 +25,8 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -60,6 +62,7 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
+    std::string config;        ///< --config FILE (applied before the other options)
     bool writeInverse = true;  ///< inverse.vdb
     bool writeJacobian = true; ///< jacobian.vdb
     bool logJacobian = false;  ///< jacobian.vdb holds log det
@@ -96,6 +99,10 @@ matchOptionTable()
          "node spacing 2^-L of deformation.vdb in the unit box (default: the finest level, "
          "which reproduces phi exactly)",
          [](O& o, const std::string& v) { o.deformationLevel = parseInt("--deformation-level", v); }},
+        {"--config", "FILE", "Input and output",
+         "parameters from a JSON file: a report.json (its \"parameters\") or an object with those "
+         "keys; options on the command line override it",
+         [](O& o, const std::string& v) { o.config = v; }},
         {"--no-inverse", nullptr, "Input and output",
          "do not write inverse.vdb (the exact inverse phi^-1 at every node)",
          [](O& o, const std::string&) { o.writeInverse = false; }},
@@ -228,11 +235,114 @@ matchOptionTable()
     // clang-format on
 }
 
+/// The keys of report.json's "parameters" that --config accepts, with the option each sets.
+const std::vector<std::pair<const char*, const char*>>&
+configKeys()
+{
+    static const std::vector<std::pair<const char*, const char*>> keys = {
+        {"energy", "--energy"},
+        {"cMatch", "--c-match"},
+        {"cMem", "--c-mem"},
+        {"cBend", "--c-bend"},
+        {"cVol", "--c-vol"},
+        {"q", "--q"},
+        {"theta", "--theta"},
+        {"tau", "--tau"},
+        {"hessianSmoothing", "--hessian-smoothing"},
+        {"minLevel", "--min-level"},
+        {"maxLevel", "--max-level"},
+        {"margin", "--margin"},
+        {"refinementMarginCells", "--refine-margin"},
+        {"metricTauFactor", "--metric-tau"},
+        {"optimizer", "--optimizer"},
+        {"initialStep", "--initial-step"},
+        {"metricTolerance", "--metric-tolerance"},
+        {"maxIterations", "--max-iterations"},
+        {"energyTolerance", "--energy-tolerance"},
+        {"settleTolerance", "--settle-tolerance"},
+        {"toleranceCoarsening", "--tolerance-coarsening"},
+        {"relativeGradientTolerance", "--gradient-tolerance"},
+    };
+    return keys;
+}
+
+/// Applies a --config file: a JSON object with the keys of report.json's "parameters", or a
+/// whole report.json (its "parameters" are used). Each key is applied as its option would be.
+/// @throw openvdb::IoError if the file cannot be read
+/// @throw openvdb::ValueError if it is not JSON, not an object, or has an unknown key or a value
+///        of the wrong type
+void
+applyConfig(const std::string& path, MatchCliOptions& o)
+{
+    std::ifstream in(path, std::ios::binary);
+    std::error_code ec;
+    if (!in || std::filesystem::is_directory(path, ec)) {
+        OPENVDB_THROW(openvdb::IoError, "--config: cannot read '" << path << "'");
+    }
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const Json doc = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+    if (doc.is_discarded() || !doc.is_object()) {
+        OPENVDB_THROW(openvdb::ValueError, "--config: '"
+                                               << path
+                                               << "' is not a JSON object (a report.json or its "
+                                                  "\"parameters\")");
+    }
+    const Json& params = doc.contains("parameters") ? doc["parameters"] : doc;
+    if (!params.is_object()) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "--config: \"parameters\" in '" << path << "' is not an object");
+    }
+    const std::vector<Option<MatchCliOptions>> table = matchOptionTable();
+    for (const auto& [key, value] : params.items()) {
+        // Written by match but fixed by the method (tab:parameters): must hold its value.
+        if (key == "sigmaFactor") {
+            if (!value.is_number() || value.get<double>() != EnergyParameters().sigmaFactor) {
+                OPENVDB_THROW(openvdb::ValueError, "--config: sigmaFactor is fixed at "
+                                                       << EnergyParameters().sigmaFactor
+                                                       << " (sigma = 2h)");
+            }
+            continue;
+        }
+        const char* option = nullptr;
+        for (const auto& [name, opt] : configKeys())
+            if (key == name) option = opt;
+        if (!option) {
+            std::string known;
+            for (const auto& kv : configKeys())
+                known += std::string(known.empty() ? "" : ", ") + kv.first;
+            OPENVDB_THROW(openvdb::ValueError, "--config: unknown key '" << key << "' in '" << path
+                                                                         << "' (known: " << known
+                                                                         << ")");
+        }
+        if (!value.is_number() && !value.is_string()) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "--config: '" << key << "' must be a number or a string");
+        }
+        const std::string valueText = value.is_string() ? value.get<std::string>() : value.dump();
+        for (const Option<MatchCliOptions>& opt : table) {
+            if (std::string(opt.name) != option) continue;
+            try {
+                opt.apply(o, valueText);
+            } catch (const UsageError& e) {
+                throw UsageError("--config '" + path + "', key '" + key + "': " + e.what());
+            }
+        }
+    }
+}
+
 MatchCliOptions
 parseMatchOptions(int argc, const char* const* argv, int first)
 {
     MatchCliOptions o;
     o.commandLine = commandLine(argc, argv);
+    // --config first, whatever its position: the command line overrides it.
+    for (int i = first; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg == "--") break;
+        if (arg == "--config" && i + 1 < argc) o.config = argv[i + 1];
+        if (arg.rfind("--config=", 0) == 0) o.config = arg.substr(9);
+    }
+    if (!o.config.empty()) applyConfig(o.config, o);
     const std::vector<std::string> positional =
         parseOptions(matchOptionTable(), argc, argv, first, o);
     if (positional.size() != 2) {
