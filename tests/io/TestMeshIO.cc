@@ -162,6 +162,20 @@ TEST_F(MeshIOTest, ObjQuadsNegativeIndicesAndIgnoredLines)
     expectUnitCube(readMesh(path));
 }
 
+TEST_F(MeshIOTest, ObjVertexColours)
+{
+    // Scanners and Blender write 'v x y z r g b' (and some 'r g b a'): the colours are skipped.
+    const std::string path = mDir.file("coloured.obj");
+    writeText(path, "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 1 1 0 0.5 0.5 0.5 1\n"
+                    "v 0 0 1 1 1 1\nv 1 0 1 1 1 1\nv 0 1 1 1 1 1\nv 1 1 1 0.2 0.3 0.4\n"
+                    "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n");
+    expectUnitCube(readMesh(path));
+    writeText(mDir.file("text.obj"), "v 0 0 0 red green blue\n");
+    EXPECT_THROW(readMesh(mDir.file("text.obj")), openvdb::ValueError);
+    writeText(mDir.file("long.obj"), "v 0 0 0 1 2 3 4 5 6\n");
+    EXPECT_THROW(readMesh(mDir.file("long.obj")), openvdb::ValueError);
+}
+
 TEST_F(MeshIOTest, PlyAsciiWithQuads)
 {
     const std::string path = mDir.file("cube.ply");
@@ -234,7 +248,7 @@ TEST_F(MeshIOTest, ErrorsNameTheFileAndTheProblem)
     writeText(mDir.file("empty.obj"), "");
     expectError<openvdb::ValueError>(mesh, mDir.file("empty.obj"), "empty");
     writeText(mDir.file("bad.obj"), "v 1 2\n");
-    expectError<openvdb::ValueError>(mesh, mDir.file("bad.obj"), "line 1: expected 'v x y z'");
+    expectError<openvdb::ValueError>(mesh, mDir.file("bad.obj"), "line 1: expected 'v x y z ");
     writeText(mDir.file("range.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n");
     expectError<openvdb::ValueError>(mesh, mDir.file("range.obj"), "out of range");
     writeText(mDir.file("nan.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nv nan 0 1\n"

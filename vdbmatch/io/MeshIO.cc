@@ -174,10 +174,18 @@ parseObj(const std::string& text, const ParseError& error)
         const auto t = tokens(line);
         if (t.empty()) continue;
         if (t[0] == "v") {
+            // x y z, optionally followed by w (4 numbers in all), r g b (scanners, Blender) or
+            // r g b a: every extra token must be a number; only x y z are used.
             Vec<3> p;
-            if (t.size() < 4 || t.size() > 5 || !parseDouble(t[1], p[0]) ||
-                !parseDouble(t[2], p[1]) || !parseDouble(t[3], p[2])) {
-                error("expected 'v x y z', got '" + std::string(line) + "'", lines.lineNumber());
+            bool ok = t.size() >= 4 && t.size() <= 8 && parseDouble(t[1], p[0]) &&
+                      parseDouble(t[2], p[1]) && parseDouble(t[3], p[2]);
+            for (size_t k = 4; ok && k < t.size(); ++k) {
+                double extra = 0;
+                ok = parseDouble(t[k], extra);
+            }
+            if (!ok) {
+                error("expected 'v x y z [w | r g b [a]]', got '" + std::string(line) + "'",
+                      lines.lineNumber());
             }
             s.points.push_back(p);
         } else if (t[0] == "f") {

@@ -27,7 +27,8 @@
 namespace vdbmatch {
 
 /// Reads a closed triangle mesh, by extension (case-insensitive):
-/// - .obj: `v x y z` and `f i j k ...` lines (1-based or negative relative indices, `i/t/n`
+/// - .obj: `v x y z` (optionally followed by `w`, or a vertex colour `r g b [a]`, ignored) and
+///   `f i j k ...` lines (1-based or negative relative indices, `i/t/n`
 ///   forms accepted); polygons are fan-triangulated; other lines (vt, vn, g, o, s, usemtl ...)
 ///   are ignored;
 /// - .ply: ascii, binary_little_endian and binary_big_endian; the vertex element's x, y, z
