@@ -6,12 +6,116 @@
 
 #include <openvdb/openvdb.h>
 
+#include <filesystem>
 #include <new>
+#include <sstream>
+#include <vector>
 #include <ostream>
 #include <string>
 
 namespace vdbmatch {
 namespace cli {
+
+namespace {
+
+/// One command of vdb_match: its usage line, what it does, and its option lines.
+struct CommandInfo
+{
+    const char* name;
+    const char* usage;
+    const char* description;
+    std::string (*options)();
+};
+
+const std::vector<CommandInfo>&
+commands()
+{
+    static const std::vector<CommandInfo> table = {
+        {"match", "[match] SOURCE TARGET -o OUTDIR",
+         "compute the deformation phi matching SOURCE (M1) onto TARGET (M2) with the multiscale "
+         "descent of the paper; writes OUTDIR/deformation.vdb, inverse.vdb, jacobian.vdb, "
+         "deformed.vdb, deformed.obj and report.json. Inputs: level sets (.vdb; a "
+         "one-voxel-thick slice is a 2D shape), meshes (.obj, .ply, .stl), closed 2D polylines "
+         "(.polyline, .txt)",
+         &matchOptionHelp},
+        {"energy", "energy SOURCE.vdb TARGET.vdb",
+         "place both level sets in the unit box, resample them at --level and print the terms "
+         "of the matching energy of the identity deformation (phi = Id)",
+         &energyOptionHelp},
+        {"consistency", "consistency PHI.vdb PSI.vdb --source M1 --target M2",
+         "measure a pair of deformations of M1 -> M2 (PHI) and M2 -> M1 (PSI), as the paper's "
+         "tab:inverseError: |psi(phi(x)) - x| and |phi(psi(y)) - y| over the domain (L2 as rms, "
+         "Linf) and over the shapes' vertices (mean, max), |phi^-1(phi(x)) - x| and "
+         "|psi(y) - phi^-1(y)| with the exact inverse, the residuals |d2(phi(x))| on M1 and "
+         "|d1(psi(y))| on M2, det D phi and det D psi; world units and fractions of the domain "
+         "size",
+         &consistencyOptionHelp},
+        {"slice", "slice PHI.vdb --source M1 --target M2 -o OUT.exr",
+         "sample an axis-aligned plane of the domain into OUT.exr (channels d1, d2, "
+         "displacement, det, residual and, with --inverse, inverse_error; world units) and "
+         "write one PNG preview per channel, OUT.<channel>.png",
+         &sliceOptionHelp},
+        {"texture", "texture PHI.vdb --source M1 -o OUTDIR",
+         "paint a pattern on M1 and carry it by phi (and psi o phi with --inverse PSI.vdb): "
+         "coloured PLY meshes (3D) or OBJ curves and deformed grid lines (2D), PNG pictures and "
+         "summary.png",
+         &textureOptionHelp},
+        {"apply", "apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse]",
+         "carry a mesh (.obj .ply .stl: vertices and normals moved, everything else kept), a "
+         "point file (.csv .xyz .txt), 2D curves (.polyline) or the grids of a .vdb file (level "
+         "sets rebuilt around the moved surface, other grids resampled) by phi, or by its exact "
+         "inverse with --inverse",
+         &applyOptionHelp},
+    };
+    return table;
+}
+
+const CommandInfo*
+findCommand(const std::string& name)
+{
+    for (const CommandInfo& c : commands())
+        if (name == c.name) return &c;
+    return nullptr;
+}
+
+/// @a text wrapped at 100 columns, no indent.
+std::string
+wrapParagraph(const std::string& text)
+{
+    constexpr std::size_t WIDTH = 100;
+    std::string out, line, word;
+    std::istringstream words(text);
+    while (words >> word) {
+        if (!line.empty() && line.size() + 1 + word.size() > WIDTH) {
+            out += line + "\n";
+            line.clear();
+        }
+        line += (line.empty() ? "" : " ") + word;
+    }
+    return out + line + "\n";
+}
+
+std::string
+exitCodeHelp()
+{
+    std::string s = "\nExit codes:\n";
+    s += wrapHelp("0", "success");
+    s += wrapHelp("1", "usage error: unknown command or option, missing argument, malformed "
+                       "number, contradictory options, --threads outside 0..1024");
+    s += wrapHelp("2", "I/O error: missing or unreadable file, output directory not writable");
+    s += wrapHelp("3", "invalid input: not a level set, several grids and no --grid, NaN or "
+                       "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
+                       "shapes that do not fit the domain, not a deformation grid, a slice "
+                       "position outside the domain, parameter out of range (levels: finest 9 "
+                       "in 3D, 12 in 2D)");
+    s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
+    s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
+                       "as interrupted");
+    s += "\nErrors are printed to stderr as one line 'vdb_match: error: ...'.\n";
+    return s;
+}
+
+} // namespace
 
 std::string
 helpText()
@@ -21,68 +125,33 @@ helpText()
          ": smooth invertible matching of closed surfaces (3D) and curves (2D)\n\n";
     s += "Usage:\n";
     s += "  vdb_match SOURCE TARGET -o OUTDIR [options]   (same as: vdb_match match ...)\n";
-    s += "  vdb_match energy SOURCE.vdb TARGET.vdb [options]\n";
-    s += "  vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]\n";
-    s += "  vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]\n";
-    s += "  vdb_match texture PHI.vdb --source M1 -o OUTDIR [options]\n";
-    s += "  vdb_match apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse] [options]\n";
+    for (const CommandInfo& c : commands()) {
+        if (std::string(c.name) != "match") s += "  vdb_match " + std::string(c.usage) + " [options]\n";
+    }
+    s += "  vdb_match COMMAND --help                      (the options of one command)\n";
     s += "  vdb_match --help | --version\n\n";
     s += "Commands:\n";
-    s += wrapHelp("[match] SOURCE TARGET",
-                  "compute the deformation phi matching SOURCE (M1) onto TARGET (M2) with the "
-                  "multiscale descent of the paper; writes OUTDIR/deformation.vdb, deformed.vdb, "
-                  "deformed.obj and report.json. Inputs: level sets (.vdb; a one-voxel-thick "
-                  "slice is a 2D shape), meshes (.obj, .ply, .stl), closed 2D polylines "
-                  "(.polyline, .txt)");
-    s += wrapHelp("energy SOURCE.vdb TARGET.vdb",
-                  "place both level sets in the unit box, resample them at --level and print "
-                  "the terms of the matching energy of the identity deformation (phi = Id)");
-    s += wrapHelp("consistency PHI.vdb PSI.vdb",
-                  "measure a pair of deformations of M1 -> M2 (PHI) and M2 -> M1 (PSI), as the "
-                  "paper's tab:inverseError: |psi(phi(x)) - x| and |phi(psi(y)) - y| over the "
-                  "domain (L2 as rms, Linf) and over the shapes' vertices (mean, max), the "
-                  "residuals |d2(phi(x))| on M1 and |d1(psi(y))| on M2, det D phi and det D psi; "
-                  "world units and fractions of the domain size");
-    s += wrapHelp("slice PHI.vdb",
-                  "sample an axis-aligned plane of the domain into OUT.exr (channels d1, d2, "
-                  "displacement, det, residual and, with --inverse, inverse_error; world units) "
-                  "and write one PNG preview per channel, OUT.<channel>.png");
-    s += wrapHelp("texture PHI.vdb --source M1 -o OUTDIR",
-                  "paint a pattern on M1 and carry it by phi (and psi o phi with --inverse "
-                  "PSI.vdb): coloured PLY meshes (3D) or OBJ curves and deformed grid lines (2D), "
-                  "PNG pictures and summary.png. Options: --target M2, --pattern "
-                  "checker|stripes|position, --bands N, --axis x|y|z, --size PX, --grid-cells N, "
-                  "--quiet (docs/cli.md)");
-    s += wrapHelp("apply DEFORMATION.vdb INPUT",
-                  "carry a mesh (.obj .ply .stl: vertices and normals moved, everything else "
-                  "kept), a point file (.csv .xyz .txt) or the grids of a .vdb file (level sets "
-                  "rebuilt around the moved surface, other grids resampled) by phi, or by its "
-                  "exact inverse with --inverse; 'vdb_match apply --help' for its options");
-    s += "\nOptions of match, as --name VALUE or --name=VALUE.\n";
-    s += matchOptionHelp();
-    s += "\nOptions of energy.\n";
-    s += energyOptionHelp();
-    s += "\nOptions of consistency.\n";
-    s += consistencyOptionHelp();
-    s += "\nOptions of slice.\n";
-    s += sliceOptionHelp();
+    for (const CommandInfo& c : commands())
+        s += wrapHelp(c.usage, c.description);
     s += "\nOther:\n";
     s += wrapHelp("-h, --help", "print this help and exit");
     s += wrapHelp("--version", "print the version and exit");
-    s += "\nExit codes:\n";
-    s += wrapHelp("0", "success");
-    s += wrapHelp("1", "usage error: unknown option, missing argument, malformed number, "
-                       "contradictory options");
-    s += wrapHelp("2", "I/O error: missing or unreadable file, output directory not writable");
-    s +=
-        wrapHelp("3", "invalid input: not a level set, several grids and no --grid, NaN or "
-                      "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
-                      "shapes that do not fit the domain, not a deformation grid, a slice position "
-                      "outside the domain, parameter out of range");
-    s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
-    s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
-                       "as interrupted");
-    s += "\nErrors are printed to stderr as one line 'vdb_match: error: ...'.\n";
+    s += exitCodeHelp();
+    return s;
+}
+
+std::string
+commandHelpText(const std::string& name)
+{
+    if (name == "apply") return applyHelpText();
+    const CommandInfo* c = findCommand(name);
+    if (!c) return helpText();
+    std::string s = "Usage: vdb_match " + std::string(c->usage) + " [options]\n\n";
+    s += wrapParagraph(std::string(c->description) + ".");
+    s += "\nOptions, as --name VALUE or --name=VALUE.\n";
+    s += c->options();
+    s += exitCodeHelp();
+    s += "See docs/cli.md; 'vdb_match --help' lists every command.\n";
     return s;
 }
 
@@ -105,15 +174,25 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
                 << openvdb::getLibraryVersionString() << ")\n";
             return EXIT_OK;
         }
-        const bool explicitCommand = command == "energy" || command == "match" ||
-                                     command == "consistency" || command == "slice" ||
-                                     command == "apply" || command == "texture";
+        const bool explicitCommand = findCommand(command) != nullptr;
+        if (!explicitCommand && !command.empty() && command[0] != '-' &&
+            command.find_first_of("./\\") == std::string::npos) {
+            // A word that is not a command and has no extension: a mistyped command, not a file.
+            std::error_code ec;
+            if (!std::filesystem::exists(command, ec)) {
+                std::string names;
+                for (const CommandInfo& c : commands())
+                    names += std::string(names.empty() ? "" : ", ") + c.name;
+                throw UsageError("unknown command '" + command + "' (commands: " + names +
+                                 "; vdb_match --help)");
+            }
+        }
         const int first = explicitCommand ? 2 : 1;
         for (int i = first; i < argc; ++i) {
             const std::string arg = argv[i];
             if (arg == "--") break;
             if (arg == "-h" || arg == "--help") {
-                out << (command == "apply" ? applyHelpText() : helpText());
+                out << (explicitCommand ? commandHelpText(command) : helpText());
                 return EXIT_OK;
             }
             if (arg == "--version") {

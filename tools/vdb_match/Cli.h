@@ -60,14 +60,19 @@ struct EnergyOptions
 /// contradictory options. Range checks are left to the library (exit code EXIT_INVALID_INPUT).
 EnergyOptions parseEnergyOptions(int argc, const char* const* argv, int first);
 
-/// The full help text (usage, commands, grouped options with defaults, exit codes).
+/// The overview: usage lines, what each command does, exit codes.
 std::string helpText();
+/// The help page of one command (`vdb_match COMMAND --help`): usage, description, its options
+/// grouped with their defaults, exit codes. The overview for an unknown name.
+std::string commandHelpText(const std::string& command);
 /// The grouped option lines of `energy` and of `match`, with their defaults.
 std::string energyOptionHelp();
 std::string matchOptionHelp();
 /// The grouped option lines of `consistency` and of `slice`, with their defaults.
 std::string consistencyOptionHelp();
 std::string sliceOptionHelp();
+/// The option lines of `texture`, with their defaults.
+std::string textureOptionHelp();
 /// The option lines of `apply`, with their defaults.
 std::string applyOptionHelp();
 /// The help page of `apply` (usage, directions, options).

@@ -415,6 +415,12 @@ runTexture(const TextureCliOptions& o, std::ostream& out, std::ostream& err)
 
 } // namespace
 
+std::string
+textureOptionHelp()
+{
+    return optionHelp(textureOptionTable());
+}
+
 int
 runTextureCommand(int argc, const char* const* argv, int first, std::ostream& out,
                   std::ostream& err)
