@@ -6,6 +6,7 @@
 #include "CliSupport.h"
 
 #include <vdbmatch/Match.h>
+#include <vdbmatch/eval/Consistency.h>
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/SurfaceExtraction.h>
@@ -535,7 +536,22 @@ struct ExtraOutputs
     double inverseMaxResidual = 0, inverseSeconds = 0;
     bool jacobian = false;
     double detMin = 1, detMax = 1, jacobianSeconds = 0;
+    std::vector<std::string> halfRefused; ///< --half files kept in float (rounding would fold)
 };
+
+/// min det D of the grid's map after rounding its values to half precision (what --half stores).
+double
+minDeterminantAsHalf(const openvdb::Vec3SGrid& grid)
+{
+    openvdb::Vec3SGrid::Ptr rounded = grid.deepCopy();
+    for (auto v = rounded->beginValueOn(); v; ++v) {
+        const openvdb::Vec3s x = *v;
+        v.setValue(openvdb::Vec3s(float(openvdb::math::half(x[0])),
+                                  float(openvdb::math::half(x[1])),
+                                  float(openvdb::math::half(x[2]))));
+    }
+    return eval::jacobianStats(DeformationField(rounded)).min;
+}
 
 /// report.json (docs/cli.md): keys in a fixed order, numbers in their shortest round-trip form,
 /// non-finite numbers as null.
@@ -640,6 +656,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                              {"seconds", extra.jacobianSeconds}};
     }
     j["half"] = o.half;
+    if (!extra.halfRefused.empty()) j["halfRefused"] = extra.halfRefused;
     j["outputs"] = extra.files;
     return dumpJson(j);
 }
@@ -818,8 +835,23 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         }
     }
     if (o.half) {
-        deformation->setSaveFloatAsHalf(true);
-        if (inverseGrid) inverseGrid->setSaveFloatAsHalf(true);
+        // Half floats keep 11 significant bits of each displacement: at fine levels that can
+        // flip a thin simplex. Store a grid in half only if its rounded values keep every
+        // det D > 0; otherwise keep float and say so.
+        for (openvdb::Vec3SGrid::Ptr grid : {deformation, inverseGrid}) {
+            if (!grid) continue;
+            const double minDet = minDeterminantAsHalf(*grid);
+            if (minDet > 0) {
+                grid->setSaveFloatAsHalf(true);
+            } else {
+                progress.message(std::string("warning: --half would fold ") +
+                                 (grid == deformation ? "deformation.vdb" : "inverse.vdb") +
+                                 " (min det D " + fixed("%.3g", minDet) +
+                                 " after rounding): written in float");
+                extra.halfRefused.push_back(grid == deformation ? "deformation.vdb"
+                                                                : "inverse.vdb");
+            }
+        }
     }
 
     const std::string dir = o.outDir;
