@@ -92,6 +92,7 @@ MatchOptions::defaults(int dim)
     opts.multiscale.descent.settleTolerance = DEFAULT_MATCH_SETTLE_TOLERANCE;
     opts.multiscale.toleranceCoarsening = DEFAULT_MATCH_TOLERANCE_COARSENING;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
+    opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
     return opts;
 }
 

@@ -59,6 +59,10 @@ constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not
 /// be exact (12 instead of 31 CG iterations per solve at level 7, same residual and energy).
 constexpr double DEFAULT_MATCH_METRIC_TOLERANCE = 1e-2;
+/// Absolute floor of the H1 gradient norm (DescentOptions::gradientTolerance): a gradient below
+/// it is rounding, e.g. when source and target are the same shape (E ~ 1e-17). Real matches
+/// start with norms of 1e1..1e3 and stop, relatively, far above it.
+constexpr double DEFAULT_MATCH_GRADIENT_FLOOR = 1e-10;
 
 /// Default extra margin of the fine region, in cells of side h_l (see the file comment): the
 /// band moves by up to about one cell during a level's descent.

@@ -127,6 +127,9 @@ assert jac.metadata["vdbmatch_det_min"] - 1e-6 <= lo <= 1.0 <= hi <= jac.metadat
 PY
 ls -A "$SCRATCH/m3" | grep -q "\.tmp" && fail "temporary files left in the output directory"
 
+# ---------------------------------------------------------------- identical shapes: phi = Id, converged at once
+check identical-shapes 0 '^vdb_match: converged; .*min det 1,' '' -- "$SPHERE" "$SPHERE" -o "$SCRATCH/same" --levels 3..4 --quiet
+
 # ---------------------------------------------------------------- --config: report.json reproduces its run
 check config-reproduces 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3c" --config "$SCRATCH/m3/report.json" --quiet
 count=$((count + 1))
