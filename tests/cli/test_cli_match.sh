@@ -192,6 +192,22 @@ assert lo < 0 < hi, (lo, hi)
 PY
 fi
 
+# ---------------------------------------------------------------- one run per OUTDIR; SIGKILL leaves no result
+"$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/busy" --levels 4..6 --quiet >/dev/null 2>&1 &
+busy=$!
+for _ in $(seq 1 100); do [ -e "$SCRATCH/busy/.vdb_match.lock" ] && break; sleep 0.1; done
+check concurrent-outdir 2 '' 'another vdb_match is writing' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/busy" --levels 3..3 --quiet
+kill -KILL "$busy" 2>/dev/null
+wait "$busy" 2>/dev/null
+count=$((count + 1))
+# Killed before writing: nothing that looks like a result (temporary files are hidden).
+if ls "$SCRATCH/busy" | grep -q .; then
+    fail "sigkill: files left after SIGKILL: $(ls "$SCRATCH/busy" | tr '\n' ' ')"
+else
+    echo "ok   sigkill-leaves-no-result"
+fi
+check outdir-free-after-kill 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/busy" --levels 3..3 --quiet
+
 # ---------------------------------------------------------------- interrupted (5)
 count=$((count + 1))
 "$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/int" --levels 4..8 --progress-every 1 >"$SCRATCH/out" 2>"$SCRATCH/err" &

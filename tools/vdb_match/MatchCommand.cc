@@ -24,7 +24,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -32,6 +35,8 @@
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <sys/file.h>
+#include <unistd.h>
 #include <vector>
 
 namespace vdbmatch {
@@ -527,6 +532,33 @@ inputJson(const Shape& in)
                 {"elements", surfaceOf<D>(in).elements.size()}};
 }
 
+/// An exclusive advisory lock (flock) on OUTDIR/.vdb_match.lock while a match writes there;
+/// the kernel releases it when the process ends, however it ends.
+class OutputLock
+{
+public:
+    explicit OutputLock(const std::string& dir)
+    {
+        const std::string path = (std::filesystem::path(dir) / ".vdb_match.lock").string();
+        mFd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (mFd < 0) {
+            OPENVDB_THROW(openvdb::IoError,
+                          "cannot create '" << path << "': " << std::strerror(errno));
+        }
+        if (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
+            ::close(mFd);
+            OPENVDB_THROW(openvdb::IoError, "another vdb_match is writing to '"
+                                                << dir << "'; wait for it or choose another -o");
+        }
+    }
+    ~OutputLock() { ::close(mFd); }
+    OutputLock(const OutputLock&) = delete;
+    OutputLock& operator=(const OutputLock&) = delete;
+
+private:
+    int mFd = -1;
+};
+
 /// What was written besides deformation.vdb, for report.json.
 struct ExtraOutputs
 {
@@ -716,6 +748,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                             << o.outDir << "'"
                                             << (ec ? ": " + ec.message() : std::string()));
     }
+    // One match per output directory: a second run into it would interleave the outputs.
+    const OutputLock lock(o.outDir);
 
     const Surface<D>& source = surfaceOf<D>(in[0]);
     const Surface<D>& target = surfaceOf<D>(in[1]);
