@@ -615,12 +615,20 @@ MeshDocument::parsePly()
                 mNormalLayout.slots.resize(std::size_t(e.count) * 3);
             }
         }
+        // An element without properties stores nothing: do not count through its instances
+        // (a header may claim 9e18 of them).
+        if (e.properties.empty()) continue;
         for (uint64_t n = 0; n < e.count; ++n) {
             for (std::size_t k = 0; k < e.properties.size(); ++k) {
                 const PlyProperty& prop = e.properties[k];
                 if (prop.isList) {
                     const double count = body.read(prop.countType);
                     if (count < 0.0) error("negative list length in element '" + e.name + "'");
+                    // Every entry takes at least one byte or character.
+                    if (count > double(body.remaining())) {
+                        error("a list of element '" + e.name + "' has " + std::to_string(count) +
+                              " entries, more than the data can hold");
+                    }
                     body.skip(prop.type, uint64_t(count));
                     continue;
                 }

@@ -440,6 +440,9 @@ parsePly(const std::string& text, const ParseError& error)
             s.points.reserve(size_t(e.count));
         }
         if (isFace && indices < 0) error("the face element has no vertex_indices list");
+        // An element without properties stores nothing: do not count through its instances
+        // (a header may claim 9e18 of them).
+        if (e.properties.empty()) continue;
         for (uint64_t n = 0; n < e.count; ++n) {
             Vec<3> p = Vec<3>::Zero();
             for (size_t k = 0; k < e.properties.size(); ++k) {
@@ -452,6 +455,11 @@ parsePly(const std::string& text, const ParseError& error)
                 }
                 const double count = body.read(prop.countType);
                 if (!(count >= 0.0)) error("negative list length in element '" + e.name + "'");
+                // Every entry takes at least one byte or character.
+                if (count > double(body.remaining())) {
+                    error("a list of element '" + e.name + "' has " + std::to_string(count) +
+                          " entries, more than the data can hold");
+                }
                 const bool keep = isFace && int(k) == indices;
                 if (keep) polygon.clear();
                 for (uint64_t i = 0; i < uint64_t(count); ++i) {
@@ -508,6 +516,18 @@ weld(const std::vector<Vec<3>>& soup)
     return s;
 }
 
+/// Rejects NaN and inf coordinates (welding sorts the points: NaN breaks the ordering).
+template <int D>
+void
+checkFinite(const std::vector<Vec<D>>& points, const ParseError& error)
+{
+    for (size_t i = 0; i < points.size(); ++i) {
+        if (!points[i].allFinite()) {
+            error("point " + std::to_string(i) + " has a non-finite coordinate (NaN or inf)");
+        }
+    }
+}
+
 Surface<3>
 parseStl(const std::string& text, const ParseError& error)
 {
@@ -540,6 +560,7 @@ parseStl(const std::string& text, const ParseError& error)
                 soup.push_back(p);
             }
         }
+        checkFinite(soup, error);
         return weld(soup);
     }
     if (text.compare(0, 5, "solid") != 0) {
@@ -567,6 +588,7 @@ parseStl(const std::string& text, const ParseError& error)
         }
     }
     if (inFacet != 0) error("the last facet is incomplete");
+    checkFinite(soup, error);
     return weld(soup);
 }
 
@@ -587,6 +609,7 @@ readMesh(const std::string& path)
         s = parseStl(text, error);
     else
         error("unknown mesh extension '" + ext + "' (expected .obj, .ply or .stl)");
+    checkFinite(s.points, error);
     checkSurface(s, "readMesh: file " + quoted(path));
     return s;
 }
@@ -635,6 +658,7 @@ readPolyline(const std::string& path)
         s.points.push_back(p);
     }
     closeCurve(lines.lineNumber());
+    checkFinite(s.points, error);
     checkSurface(s, "readPolyline: file " + quoted(path));
     return s;
 }
