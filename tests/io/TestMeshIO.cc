@@ -324,15 +324,17 @@ TEST_F(MeshIOTest, PlyHugeElementWithoutPropertiesDoesNotHang)
                                      "more than the data can hold");
 }
 
-// Found by fuzzing (FuzzMeshPly): an ascii list length of 1e300 was converted to an integer
-// (undefined behaviour) before the data ran out.
+// Found by review while writing the fuzz targets: an ascii list length of 1e300 was converted
+// to an integer (undefined behaviour) before the data ran out.
 TEST_F(MeshIOTest, PlyHugeListLengthIsAnError)
 {
     std::string ply = plyTetraWithElement("0");
     ply.replace(ply.find("3 0 2 1"), 1, "1e300");
     writeText(mDir.file("list.ply"), ply);
     auto mesh = [](const std::string& p) { readMesh(p); };
-    expectError<openvdb::ValueError>(mesh, mDir.file("list.ply"), "more than the data can hold");
+    expectError<openvdb::ValueError>(mesh, mDir.file("list.ply"),
+                                     "unexpected end of the data: a list of element 'face' "
+                                     "claims 1e+300 entries");
 }
 
 // NaN coordinates broke the ordering with which STL vertices are welded (std::sort with an

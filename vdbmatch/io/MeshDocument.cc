@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <sstream>
 #include <string_view>
 #include <system_error>
 
@@ -624,10 +625,14 @@ MeshDocument::parsePly()
                 if (prop.isList) {
                     const double count = body.read(prop.countType);
                     if (count < 0.0) error("negative list length in element '" + e.name + "'");
-                    // Every entry takes at least one byte or character.
+                    // Every entry takes at least one byte or character: a longer list runs past the
+                    // end.
                     if (count > double(body.remaining())) {
-                        error("a list of element '" + e.name + "' has " + std::to_string(count) +
-                              " entries, more than the data can hold");
+                        std::ostringstream m;
+                        m << "unexpected end of the data: a list of element '" << e.name
+                          << "' claims " << count << " entries, more than the " << body.remaining()
+                          << " bytes left";
+                        error(m.str());
                     }
                     body.skip(prop.type, uint64_t(count));
                     continue;

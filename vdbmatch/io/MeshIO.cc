@@ -8,6 +8,7 @@
 #include <array>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -455,10 +456,13 @@ parsePly(const std::string& text, const ParseError& error)
                 }
                 const double count = body.read(prop.countType);
                 if (!(count >= 0.0)) error("negative list length in element '" + e.name + "'");
-                // Every entry takes at least one byte or character.
+                // Every entry takes at least one byte or character: a longer list runs past the
+                // end.
                 if (count > double(body.remaining())) {
-                    error("a list of element '" + e.name + "' has " + std::to_string(count) +
-                          " entries, more than the data can hold");
+                    std::ostringstream m;
+                    m << "unexpected end of the data: a list of element '" << e.name << "' claims "
+                      << count << " entries, more than the " << body.remaining() << " bytes left";
+                    error(m.str());
                 }
                 const bool keep = isFace && int(k) == indices;
                 if (keep) polygon.clear();
@@ -522,7 +526,12 @@ void
 checkFinite(const std::vector<Vec<D>>& points, const ParseError& error)
 {
     for (size_t i = 0; i < points.size(); ++i) {
-        if (!points[i].allFinite()) {
+        // std::isfinite per coordinate: Eigen's allFinite() computes x - x, which traps with
+        // floating-point exceptions enabled (the tests' debug builds).
+        bool finite = true;
+        for (int a = 0; a < D; ++a)
+            finite = finite && std::isfinite(points[i][a]);
+        if (!finite) {
             error("point " + std::to_string(i) + " has a non-finite coordinate (NaN or inf)");
         }
     }
