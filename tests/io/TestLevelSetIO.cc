@@ -374,11 +374,50 @@ TEST_F(LevelSetIOTest, FuzzedFilesAreIoErrors)
     EXPECT_LT(peakRssMb() - rssBefore, 200.0);
 }
 
-// Found by the fuzzer: a blosc block size of 66 TB inside the grid data. OpenVDB allocates it
-// (io::bloscFromStream) before reading; this check cannot bound it without decoding the tree.
-// The allocation fails (std::bad_alloc), which readLevelSet reports as an IoError.
+// Found by the fuzzer: a blosc block size changed to 0 makes OpenVDB read the following mask
+// bytes as a block size of 66 TB, which io::bloscFromStream allocates before reading. The
+// structure check walks the nodes: their topology no longer ends at the grid's block position.
 TEST_F(LevelSetIOTest, FuzzedHugeCompressedBlockIsAnIoError)
 {
     const std::string path = std::string(VDBMATCH_FUZZ_DATA_DIR) + "/vdb_blosc_size_66tb.vdb";
-    EXPECT_THROW(readLevelSet(path), openvdb::IoError);
+    const std::string msg = messageOf<openvdb::IoError>([&] { readLevelSet(path); });
+    EXPECT_TRUE(contains(msg, "has a tree topology ending at byte 9940 where its descriptor "
+                              "says 9972"))
+        << msg;
+}
+
+// checkVdbFileStructure walks the nodes of a grid the way OpenVDB reads them: it must accept
+// every compression and half-float setting OpenVDB writes (vdb_match --half writes half
+// floats), for level sets and deformation grids.
+TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
+{
+    const uint32_t settings[] = {openvdb::io::COMPRESS_NONE, openvdb::io::COMPRESS_ZIP,
+                                 openvdb::io::COMPRESS_ACTIVE_MASK,
+                                 openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                 openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK};
+    for (const uint32_t compression : settings) {
+        for (const bool half : {false, true}) {
+            auto grid = sphere();
+            grid->setSaveFloatAsHalf(half);
+            auto u = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+            u->setName(DEFORMATION_GRID_NAME);
+            u->setSaveFloatAsHalf(half);
+            u->tree().setValueOn(openvdb::Coord(0, 0, 0), openvdb::Vec3s(0.1f, 0.2f, 0.3f));
+            u->tree().setValueOn(openvdb::Coord(100, 7, -50), openvdb::Vec3s(-0.1f));
+            u->tree().addTile(1, openvdb::Coord(4096, 0, 0), openvdb::Vec3s(0.5f), true);
+            const std::string path = mDir.file("settings.vdb");
+            {
+                openvdb::io::File file(path);
+                file.setCompression(compression);
+                file.write({grid, u});
+                file.close();
+            }
+            SCOPED_TRACE("compression " + std::to_string(compression) + ", half " +
+                         std::to_string(half));
+            EXPECT_NO_THROW(readLevelSet(path, "surface"));
+            openvdb::Vec3SGrid::Ptr back;
+            EXPECT_NO_THROW(back = readDeformation(path));
+            if (back) EXPECT_EQ(back->activeVoxelCount(), u->activeVoxelCount());
+        }
+    }
 }

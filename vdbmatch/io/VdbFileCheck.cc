@@ -2,6 +2,7 @@
 /// @brief Bounds check of the structure of a .vdb file before OpenVDB reads it.
 #include "VdbFileCheck.h"
 
+#include <openvdb/io/Compression.h>
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
@@ -9,8 +10,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <system_error>
 #include <utility>
+#include <vector>
 
 namespace vdbmatch {
 
@@ -32,17 +35,29 @@ constexpr std::uint64_t MIN_GRID_DESCRIPTOR_BYTES = 3 * 4 + 3 * 8;
 constexpr std::uint64_t MAX_TYPE_NAME_BYTES = 256;
 
 /// Bytes of a value of a tree's value type, from the grid type name ("Tree_float_5_4_3",
-/// optionally with the half-float suffix); 0 for a type this check does not know.
+/// optionally with the half-float suffix); 0 for a type this check does not know (bool and
+/// mask trees store their leaves differently; point grids have their own codecs).
 std::uint64_t
 valueBytes(const std::string& gridType)
 {
     static const std::pair<const char*, std::uint64_t> table[] = {
-        {"Tree_float_", 4},  {"Tree_double_", 8}, {"Tree_int32_", 4},  {"Tree_int64_", 8},
-        {"Tree_vec3s_", 12}, {"Tree_vec3d_", 24}, {"Tree_vec3i_", 12}, {"Tree_bool_", 1}};
+        {"Tree_float_", 4},  {"Tree_double_", 8}, {"Tree_int32_", 4}, {"Tree_int64_", 8},
+        {"Tree_vec3s_", 12}, {"Tree_vec3d_", 24}, {"Tree_vec3i_", 12}};
     for (const auto& [prefix, bytes] : table) {
         if (gridType.rfind(prefix, 0) == 0) return bytes;
     }
     return 0;
+}
+
+/// Bytes of a value as stored in uncompressed node data: half floats for a real type saved as
+/// half (io::HalfReader), else the value itself.
+std::uint64_t
+storedValueBytes(const std::string& gridType, std::uint64_t valueSize)
+{
+    if (gridType.find("_HalfFloat") == std::string::npos) return valueSize;
+    if (gridType.rfind("Tree_float_", 0) == 0 || gridType.rfind("Tree_double_", 0) == 0) return 2;
+    if (gridType.rfind("Tree_vec3s_", 0) == 0 || gridType.rfind("Tree_vec3d_", 0) == 0) return 6;
+    return valueSize;
 }
 
 /// Bytes of the two node masks that start the topology of a child of the root: the first
@@ -181,6 +196,149 @@ private:
     std::string mWhere;
 };
 
+/// Walks the topology and the leaf buffers of a standard tree (root, internal nodes of log2
+/// dimensions 5 and 4, leaves of 3: the "_5_4_3" trees) the way OpenVDB reads them
+/// (InternalNode::readTopology, LeafNode::readTopology/readBuffers, io::readCompressedValues)
+/// and checks each compressed block size (io::bloscFromStream and unzipFromStream allocate it
+/// before reading) against the end of its section. Nothing is allocated from file values.
+class TreeWalker
+{
+public:
+    TreeWalker(BoundedReader& in, std::uint32_t compression, std::uint64_t valueSize,
+               std::uint64_t storedValueSize, int grid)
+        : mIn(in), mCompression(compression), mValueSize(valueSize),
+          mStoredValueSize(storedValueSize), mGrid(grid)
+    {
+    }
+
+    /// The root's children (each: coordinates, then an internal node of log2 dimension 5),
+    /// which end at @a topologyEnd (the grid's block position); then the buffers of the leaves
+    /// found, which end at @a endPos.
+    void walk(std::uint64_t children, std::uint64_t topologyEnd, std::uint64_t endPos)
+    {
+        mEnd = topologyEnd;
+        for (std::uint64_t c = 0; c < children; ++c) {
+            skip(ROOT_ENTRY_COORD_BYTES);
+            internalNode(UPPER_LOG2DIM);
+        }
+        // The sections must end where the grid descriptor says: anything else means the
+        // nodes are not what their masks and sizes claim, and OpenVDB would read values or
+        // block sizes from the wrong bytes.
+        if (mIn.position() != topologyEnd) {
+            fail("has a tree topology ending at byte " + std::to_string(mIn.position()) +
+                 " where its descriptor says " + std::to_string(topologyEnd));
+        }
+        mEnd = endPos;
+        for (std::uint64_t l = 0; l < mLeaves; ++l) {
+            std::uint64_t mask[LEAF_MASK_WORDS];
+            read(mask, sizeof(mask));
+            compressedValues(LEAF_VALUES, popcount(mask, LEAF_MASK_WORDS), LEAF_LOG2DIM);
+        }
+        if (mIn.position() != endPos) {
+            fail("has leaf data ending at byte " + std::to_string(mIn.position()) +
+                 " where its descriptor says " + std::to_string(endPos));
+        }
+    }
+
+private:
+    static constexpr int UPPER_LOG2DIM = 5, LOWER_LOG2DIM = 4, LEAF_LOG2DIM = 3;
+    static constexpr std::uint64_t LEAF_VALUES = 512, LEAF_MASK_WORDS = LEAF_VALUES / 64;
+    /// readCompressedValues metadata (io/Compression.h): which inactive values and selection
+    /// mask precede the values.
+    enum : std::int8_t {
+        NO_MASK_AND_ONE_INACTIVE_VAL = 2,
+        MASK_AND_NO_INACTIVE_VALS = 3,
+        MASK_AND_ONE_INACTIVE_VAL = 4,
+        MASK_AND_TWO_INACTIVE_VALS = 5,
+        NO_MASK_AND_ALL_VALS = 6
+    };
+
+    static std::uint64_t popcount(const std::uint64_t* words, std::size_t n)
+    {
+        std::uint64_t count = 0;
+        for (std::size_t i = 0; i < n; ++i)
+            count += std::uint64_t(__builtin_popcountll(words[i]));
+        return count;
+    }
+
+    void fail(const std::string& problem) const
+    {
+        mIn.fail("is corrupt: grid " + std::to_string(mGrid) + " " + problem);
+    }
+
+    void skip(std::uint64_t n)
+    {
+        if (n > mEnd - std::min(mEnd, mIn.position())) fail("runs past the end of its section");
+        mIn.skip(n, "a tree node");
+    }
+
+    void read(void* out, std::uint64_t n)
+    {
+        if (n > mEnd - std::min(mEnd, mIn.position())) fail("runs past the end of its section");
+        mIn.bytes(out, n, "a tree node");
+    }
+
+    /// An internal node's topology: child mask, value mask, its tile values, its children.
+    void internalNode(int log2Dim)
+    {
+        const std::size_t words = (std::size_t(1) << (3 * log2Dim)) / 64;
+        std::vector<std::uint64_t> childMask(words), valueMask(words);
+        read(childMask.data(), words * 8);
+        read(valueMask.data(), words * 8);
+        compressedValues(std::uint64_t(words) * 64, popcount(valueMask.data(), words), log2Dim);
+        const std::uint64_t children = popcount(childMask.data(), words);
+        for (std::uint64_t c = 0; c < children; ++c) {
+            if (log2Dim == UPPER_LOG2DIM) {
+                internalNode(LOWER_LOG2DIM);
+            } else {
+                skip(LEAF_MASK_WORDS * 8); // a leaf's topology: its value mask
+                ++mLeaves;
+            }
+        }
+    }
+
+    /// io::readCompressedValues of @a count values of which @a active are on.
+    void compressedValues(std::uint64_t count, std::uint64_t active, int log2Dim)
+    {
+        std::int8_t metadata = NO_MASK_AND_ALL_VALS;
+        read(&metadata, 1);
+        if (metadata == NO_MASK_AND_ONE_INACTIVE_VAL || metadata == MASK_AND_ONE_INACTIVE_VAL ||
+            metadata == MASK_AND_TWO_INACTIVE_VALS) {
+            skip(mValueSize * (metadata == MASK_AND_TWO_INACTIVE_VALS ? 2 : 1));
+        }
+        if (metadata == MASK_AND_NO_INACTIVE_VALS || metadata == MASK_AND_ONE_INACTIVE_VAL ||
+            metadata == MASK_AND_TWO_INACTIVE_VALS) {
+            skip((std::uint64_t(1) << (3 * log2Dim)) / 8); // the selection mask
+        }
+        const bool maskCompressed = (mCompression & openvdb::io::COMPRESS_ACTIVE_MASK) != 0;
+        const std::uint64_t stored =
+            maskCompressed && metadata != NO_MASK_AND_ALL_VALS ? active : count;
+        // Half floats are read by io::HalfReader, which reads nothing at all for no values.
+        const bool halfReal = mStoredValueSize != mValueSize;
+        if (halfReal && stored == 0) return;
+        if (mCompression & (openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ZIP)) {
+            // A negative size stores the bytes uncompressed.
+            std::int64_t n = 0;
+            read(&n, sizeof(n));
+            if (n == std::numeric_limits<std::int64_t>::min()) fail("has an invalid block size");
+            const std::uint64_t bytes = std::uint64_t(n < 0 ? -n : n);
+            if (bytes > mEnd - std::min(mEnd, mIn.position())) {
+                fail("has a compressed block of " + std::to_string(bytes) +
+                     " bytes, more than the rest of its section");
+            }
+            skip(bytes);
+        } else {
+            skip(stored * mStoredValueSize);
+        }
+    }
+
+    BoundedReader& mIn;
+    std::uint32_t mCompression;
+    std::uint64_t mValueSize, mStoredValueSize;
+    int mGrid;
+    std::uint64_t mEnd = 0, mLeaves = 0;
+};
+
 } // namespace
 
 void
@@ -255,9 +413,10 @@ checkVdbFileStructure(const std::string& path, const std::string& caller)
         // What readAllGridMetadata reads of the grid: compression, metadata, transform type;
         // all of it precedes the grid's topology, which precedes blockPos.
         in.seek(std::uint64_t(gridPos));
-        if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) {
-            in.skip(4, "grid compression flags");
-        }
+        std::uint32_t compression = 0;
+        const bool hasGridCompression =
+            version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION;
+        if (hasGridCompression) compression = in.value<std::uint32_t>("grid compression flags");
         in.skipMetaMap("the grid metadata");
         // Before format 216 the topology precedes the transform; before 219 the transform has
         // another layout (Archive::readGrid, Transform::read).
@@ -292,6 +451,14 @@ checkVdbFileStructure(const std::string& path, const std::string& caller)
                         std::to_string(tiles) + " root tiles and " + std::to_string(children) +
                         " children, more than its " + std::to_string(topologyBytes) +
                         " bytes of topology can hold");
+            }
+            for (std::uint64_t t = 0; t < tiles; ++t)
+                in.skip(ROOT_ENTRY_COORD_BYTES + valueSize + ROOT_TILE_ACTIVE_BYTES, "a root tile");
+            // The nodes below the root, for the 5_4_3 trees whose layout this check knows.
+            if (hasGridCompression && gridType.find("_5_4_3") != std::string::npos) {
+                TreeWalker(in, compression, valueSize, storedValueBytes(gridType, valueSize),
+                           int(g))
+                    .walk(children, std::uint64_t(blockPos), std::uint64_t(endPos));
             }
         }
         in.seek(std::uint64_t(endPos));
