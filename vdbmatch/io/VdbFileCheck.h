@@ -10,8 +10,15 @@
 /// - the file metadata (count, then name, type name and sized value of each item);
 /// - each grid descriptor (unique name, type name, instance parent, grid/block/end offsets),
 ///   the grid's compression flags, metadata and transform type name;
-/// and checks that every length and count fits in the bytes that follow, and that the offsets
-/// of each grid are ordered and lie inside the file.
+/// - for trees of a known value type (float, double, int32, int64, vec3s/d/i): the root's tile
+///   and child counts, and, for the standard 5_4_3 trees, every node below the root (masks,
+///   the metadata, inactive values and selection mask of io::readCompressedValues, and the
+///   size of each blosc/zip block, which io::bloscFromStream allocates before reading);
+/// and checks that every length and count fits in the bytes that follow, that the offsets of
+/// each grid are ordered and lie inside the file, and that a walked tree's topology and leaf
+/// data end exactly at the grid's block and end offsets.
+/// Files of format version 213 (2013) and later are accepted; bool, mask and point grids and
+/// other tree configurations are checked down to their descriptors only.
 #pragma once
 
 #include <string>
