@@ -765,3 +765,14 @@ TEST_F(MeshDocumentTest, PlyHugeCountsDoNotHang)
     expectReadError<openvdb::ValueError>(mDir.file("list.ply"),
                                          "a list of element 'face' claims 1e+300 entries");
 }
+
+// Issue 10, part 6: an STL header claiming 4e9 triangles is rejected without allocating.
+TEST_F(MeshDocumentTest, StlHugeTriangleCountIsAnError)
+{
+    std::string stl(80, ' ');
+    const uint32_t huge = 0xffffffffu;
+    stl.append(reinterpret_cast<const char*>(&huge), sizeof(huge));
+    stl.append(50, '\0');
+    writeText(mDir.file("huge.stl"), stl);
+    expectReadError<openvdb::ValueError>(mDir.file("huge.stl"), "does not match 84 + 50");
+}

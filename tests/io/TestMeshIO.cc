@@ -359,3 +359,15 @@ TEST_F(MeshIOTest, NonFiniteCoordinatesAreErrors)
     writeText(mDir.file("nan.polyline"), "0 0\n1 0\nnan 1\n");
     expectError<openvdb::ValueError>(poly, mDir.file("nan.polyline"), "non-finite");
 }
+
+// Issue 10, part 6: an STL header claiming 4e9 triangles (the most a binary STL can declare)
+// is not taken as binary (the size does not match) and is rejected without allocating.
+TEST_F(MeshIOTest, StlHugeTriangleCountIsAnError)
+{
+    std::string stl = binaryStl(cubeMesh());
+    const uint32_t huge = 0xffffffffu;
+    std::memcpy(&stl[80], &huge, sizeof(huge));
+    writeText(mDir.file("huge.stl"), stl);
+    auto mesh = [](const std::string& p) { readMesh(p); };
+    expectError<openvdb::ValueError>(mesh, mDir.file("huge.stl"), "does not match 84 + 50");
+}
