@@ -396,12 +396,12 @@ TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
                                  openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK,
                                  openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK};
     for (const uint32_t compression : settings) {
-        for (const bool half : {false, true}) {
+        for (const bool asHalf : {false, true}) {
             auto grid = sphere();
-            grid->setSaveFloatAsHalf(half);
+            grid->setSaveFloatAsHalf(asHalf);
             auto u = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
             u->setName(DEFORMATION_GRID_NAME);
-            u->setSaveFloatAsHalf(half);
+            u->setSaveFloatAsHalf(asHalf);
             u->tree().setValueOn(openvdb::Coord(0, 0, 0), openvdb::Vec3s(0.1f, 0.2f, 0.3f));
             u->tree().setValueOn(openvdb::Coord(100, 7, -50), openvdb::Vec3s(-0.1f));
             u->tree().addTile(1, openvdb::Coord(4096, 0, 0), openvdb::Vec3s(0.5f), true);
@@ -413,11 +413,13 @@ TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
                 file.close();
             }
             SCOPED_TRACE("compression " + std::to_string(compression) + ", half " +
-                         std::to_string(half));
+                         std::to_string(asHalf));
             EXPECT_NO_THROW(readLevelSet(path, "surface"));
             openvdb::Vec3SGrid::Ptr back;
             EXPECT_NO_THROW(back = readDeformation(path));
-            if (back) EXPECT_EQ(back->activeVoxelCount(), u->activeVoxelCount());
+            if (back) {
+                EXPECT_EQ(back->activeVoxelCount(), u->activeVoxelCount());
+            }
         }
     }
 }
