@@ -116,7 +116,7 @@ openvdb::Vec3SGrid::Ptr
 readDeformation(const std::string& path)
 {
     // Lengths and offsets against the file size before OpenVDB allocates from them.
-    checkVdbFileStructure(path, "readDeformation");
+    checkVdbFileStructure(path, "readDeformation: cannot read '" + path + "':");
     openvdb::GridBase::Ptr base;
     try {
         openvdb::io::File file(path);

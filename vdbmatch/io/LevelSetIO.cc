@@ -157,7 +157,7 @@ readLevelSet(const std::string& path, const std::string& gridName)
     }
     // OpenVDB allocates from the lengths in the file before reading the bytes (a truncated
     // file made it allocate gigabytes): check them against the file size first.
-    checkVdbFileStructure(path, "readLevelSet");
+    checkVdbFileStructure(path, where);
 
     openvdb::io::File file(path);
     openvdb::GridPtrVecPtr metadata;

@@ -342,9 +342,8 @@ private:
 } // namespace
 
 void
-checkVdbFileStructure(const std::string& path, const std::string& caller)
+checkVdbFileStructure(const std::string& path, const std::string& where)
 {
-    const std::string where = caller + ": file '" + path + "'";
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (!std::filesystem::exists(status))

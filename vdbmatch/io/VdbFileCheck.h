@@ -27,10 +27,11 @@ namespace vdbmatch {
 
 /// Checks the structure of the .vdb file at @a path (see the file comment).
 /// @param path    file to check
-/// @param caller  names the calling function in messages, e.g. "readLevelSet"
-/// @throw openvdb::IoError naming @a caller and the file if it cannot be opened, is not a VDB
+/// @param where   starts every message and names the caller and the file, e.g.
+///                "readLevelSet: file 'a.vdb'" (followed by " is truncated or corrupt: ...")
+/// @throw openvdb::IoError starting with @a where if the file cannot be opened, is not a VDB
 ///        file, was written without grid offsets (an OpenVDB stream, not supported), or a
 ///        length, count or offset does not fit in the file (truncated or corrupt)
-void checkVdbFileStructure(const std::string& path, const std::string& caller);
+void checkVdbFileStructure(const std::string& path, const std::string& where);
 
 } // namespace vdbmatch
