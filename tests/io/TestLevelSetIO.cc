@@ -2,6 +2,7 @@
 /// @brief Tests of readLevelSet (grid selection, every rejected kind of input and its exception
 /// type and message), checkInputLevelSet, and writeGridsAtomically.
 
+#include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/io/LevelSetIO.h>
 
 #include <gtest/gtest.h>
@@ -14,6 +15,7 @@
 #include <fstream>
 #include <limits>
 #include <string>
+#include <sys/resource.h>
 #include <unistd.h>
 
 using namespace vdbmatch;
@@ -300,4 +302,124 @@ TEST_F(LevelSetIOTest, FailedWriteLeavesNothing)
     EXPECT_THROW(writeGridsAtomically(path, {sphere()}, openvdb::MetaMap()), openvdb::IoError);
     EXPECT_FALSE(fs::exists(path));
     EXPECT_TRUE(fs::is_empty(mDir.path()));
+}
+
+/// Peak resident memory of this process so far, in MB.
+double
+peakRssMb()
+{
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return double(usage.ru_maxrss) / 1024.0; // kilobytes on Linux
+}
+
+// Issue 10: a .vdb truncated to 300 bytes made `match` grow to 5.1 GB (OpenVDB allocates from
+// lengths it reads; past the end of the file they are uninitialised). checkVdbFileStructure
+// now rejects it before OpenVDB reads anything, in readLevelSet and in readDeformation.
+TEST_F(LevelSetIOTest, TruncatedFilesFailBeforeAllocating)
+{
+    write(mDir.file("whole.vdb"), {sphere()});
+    const auto size = fs::file_size(mDir.file("whole.vdb"));
+    const double rssBefore = peakRssMb();
+    for (const std::uintmax_t cut :
+         {std::uintmax_t(0), std::uintmax_t(7), std::uintmax_t(8), std::uintmax_t(12),
+          std::uintmax_t(57), std::uintmax_t(100), std::uintmax_t(200), std::uintmax_t(300),
+          std::uintmax_t(1000), size / 2, size - 1}) {
+        fs::copy_file(mDir.file("whole.vdb"), mDir.file("cut.vdb"),
+                      fs::copy_options::overwrite_existing);
+        fs::resize_file(mDir.file("cut.vdb"), cut);
+        const std::string msg =
+            messageOf<openvdb::IoError>([&] { readLevelSet(mDir.file("cut.vdb")); });
+        EXPECT_TRUE(contains(msg, "cut.vdb")) << cut << ": " << msg;
+        EXPECT_TRUE(contains(msg, "truncated") || contains(msg, "cannot be read as a VDB file"))
+            << cut << ": " << msg;
+        EXPECT_FALSE(
+            messageOf<openvdb::IoError>([&] { readDeformation(mDir.file("cut.vdb")); }).empty())
+            << cut;
+    }
+    EXPECT_TRUE(contains(messageOf<openvdb::IoError>([&] {
+                             fs::resize_file(mDir.file("cut.vdb"), 300);
+                             readLevelSet(mDir.file("cut.vdb"));
+                         }),
+                         "is truncated or corrupt: grid 0 spans bytes"));
+    EXPECT_LT(peakRssMb() - rssBefore, 200.0);
+}
+
+// Inputs found or suggested by fuzzing (fuzz/FuzzLevelSetIO.cc, docs/fuzzing.md): each is an
+// IoError naming the problem, for both readers, without a huge allocation or a hang.
+TEST_F(LevelSetIOTest, FuzzedFilesAreIoErrors)
+{
+    const std::pair<const char*, const char*> cases[] = {
+        // Found by the fuzzer: format version 0 (pre-2013 layout), huge metadata lengths.
+        {"vdb_version0_metadata_oom.vdb", "file format version 0 is not supported"},
+        {"vdb_version0_timeout.vdb", "file format version 0 is not supported"},
+        // Found by the fuzzer: a root tile count of 3.9e9 (a 10 s+ loop in RootNode).
+        {"vdb_root_tiles_timeout.vdb", "root tiles"},
+        // Crafted from a valid file: one field changed each.
+        {"vdb_root_children_4e9.vdb", "4294967295 children"},
+        {"vdb_root_tiles_4e9.vdb", "4294967295 root tiles"},
+        {"vdb_metadata_name_4gb.vdb", "the grid metadata needs 4294967280 bytes"},
+        {"vdb_grid_count_2e9.vdb", "claims 2147483647 grids"},
+        {"vdb_grid_end_past_eof.vdb", "grid 0 spans bytes"},
+    };
+    const double rssBefore = peakRssMb();
+    for (const auto& [name, expected] : cases) {
+        const std::string path = std::string(VDBMATCH_FUZZ_DATA_DIR) + "/" + name;
+        ASSERT_TRUE(fs::exists(path)) << path;
+        const std::string msg = messageOf<openvdb::IoError>([&] { readLevelSet(path); });
+        EXPECT_TRUE(contains(msg, expected)) << name << ": " << msg;
+        const std::string msg2 = messageOf<openvdb::IoError>([&] { readDeformation(path); });
+        EXPECT_TRUE(contains(msg2, expected)) << name << ": " << msg2;
+    }
+    EXPECT_LT(peakRssMb() - rssBefore, 200.0);
+}
+
+// Found by the fuzzer: a blosc block size changed to 0 makes OpenVDB read the following mask
+// bytes as a block size of 66 TB, which io::bloscFromStream allocates before reading. The
+// structure check walks the nodes: their topology no longer ends at the grid's block position.
+TEST_F(LevelSetIOTest, FuzzedHugeCompressedBlockIsAnIoError)
+{
+    const std::string path = std::string(VDBMATCH_FUZZ_DATA_DIR) + "/vdb_blosc_size_66tb.vdb";
+    const std::string msg = messageOf<openvdb::IoError>([&] { readLevelSet(path); });
+    EXPECT_TRUE(contains(msg, "has a tree topology ending at byte 9940 where its descriptor "
+                              "says 9972"))
+        << msg;
+}
+
+// checkVdbFileStructure walks the nodes of a grid the way OpenVDB reads them: it must accept
+// every compression and half-float setting OpenVDB writes (vdb_match --half writes half
+// floats), for level sets and deformation grids.
+TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
+{
+    const uint32_t settings[] = {openvdb::io::COMPRESS_NONE, openvdb::io::COMPRESS_ZIP,
+                                 openvdb::io::COMPRESS_ACTIVE_MASK,
+                                 openvdb::io::COMPRESS_ZIP | openvdb::io::COMPRESS_ACTIVE_MASK,
+                                 openvdb::io::COMPRESS_BLOSC | openvdb::io::COMPRESS_ACTIVE_MASK};
+    for (const uint32_t compression : settings) {
+        for (const bool asHalf : {false, true}) {
+            auto grid = sphere();
+            grid->setSaveFloatAsHalf(asHalf);
+            auto u = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+            u->setName(DEFORMATION_GRID_NAME);
+            u->setSaveFloatAsHalf(asHalf);
+            u->tree().setValueOn(openvdb::Coord(0, 0, 0), openvdb::Vec3s(0.1f, 0.2f, 0.3f));
+            u->tree().setValueOn(openvdb::Coord(100, 7, -50), openvdb::Vec3s(-0.1f));
+            u->tree().addTile(1, openvdb::Coord(4096, 0, 0), openvdb::Vec3s(0.5f), true);
+            const std::string path = mDir.file("settings.vdb");
+            {
+                openvdb::io::File file(path);
+                file.setCompression(compression);
+                file.write({grid, u});
+                file.close();
+            }
+            SCOPED_TRACE("compression " + std::to_string(compression) + ", half " +
+                         std::to_string(asHalf));
+            EXPECT_NO_THROW(readLevelSet(path, "surface"));
+            openvdb::Vec3SGrid::Ptr back;
+            EXPECT_NO_THROW(back = readDeformation(path));
+            if (back) {
+                EXPECT_EQ(back->activeVoxelCount(), u->activeVoxelCount());
+            }
+        }
+    }
 }

@@ -736,3 +736,43 @@ TEST_F(MeshDocumentTest, WriteFailuresLeaveNoFile)
     }
     EXPECT_EQ(files, 2); // cube.obj and in.ply only: no temporary file left
 }
+
+// Issue 10: a PLY header declaring an element of 1e12 (or 9e18) instances without properties
+// hung for minutes; such an element stores nothing and is now skipped at once. An ascii list
+// length of 1e300 (found by review while writing the fuzz targets) is an error, not an integer
+// conversion.
+TEST_F(MeshDocumentTest, PlyHugeCountsDoNotHang)
+{
+    const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                             "property float y\nproperty float z\n";
+    const std::string body = "0 0 0\n1 0 0\n0 1 0\n";
+    for (const char* count : {"1000000000000", "9000000000000000000", "9223372036854775807"}) {
+        const std::string ply = head + "element junk " + count + "\nend_header\n" + body;
+        writeText(mDir.file("huge.ply"), ply);
+        const MeshDocument doc = MeshDocument::read(mDir.file("huge.ply"));
+        EXPECT_EQ(doc.vertexCount(), 3u);
+        EXPECT_EQ(doc.render(), ply);
+    }
+    writeText(mDir.file("huge_prop.ply"), head +
+                                              "element junk 1000000000000\nproperty uchar a\n"
+                                              "end_header\n" +
+                                              body);
+    expectReadError<openvdb::ValueError>(mDir.file("huge_prop.ply"), "more than the data can hold");
+    writeText(mDir.file("list.ply"), head +
+                                         "element face 1\nproperty list uchar int "
+                                         "vertex_indices\nend_header\n" +
+                                         body + "1e300 0 1 2\n");
+    expectReadError<openvdb::ValueError>(mDir.file("list.ply"),
+                                         "a list of element 'face' claims 1e+300 entries");
+}
+
+// Issue 10, part 6: an STL header claiming 4e9 triangles is rejected without allocating.
+TEST_F(MeshDocumentTest, StlHugeTriangleCountIsAnError)
+{
+    std::string stl(80, ' ');
+    const uint32_t huge = 0xffffffffu;
+    stl.append(reinterpret_cast<const char*>(&huge), sizeof(huge));
+    stl.append(50, '\0');
+    writeText(mDir.file("huge.stl"), stl);
+    expectReadError<openvdb::ValueError>(mDir.file("huge.stl"), "does not match 84 + 50");
+}

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 
@@ -301,4 +302,86 @@ TEST_F(MeshIOTest, AtomicWriteFailuresLeaveNothing)
         ++files;
     }
     EXPECT_EQ(files, 1);
+}
+
+namespace {
+
+/// An ascii PLY tetrahedron (closed) with an extra element of @a count instances declared
+/// before the faces, with the given property lines (none: it stores nothing).
+std::string
+plyTetraWithElement(const std::string& count, const std::string& properties = "")
+{
+    return "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+           "property float z\nelement junk " +
+           count + "\n" + properties +
+           "element face 4\nproperty list uchar int vertex_indices\nend_header\n"
+           "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 2 0 3\n";
+}
+
+} // namespace
+
+// Issue 10: a PLY header declaring an element of 1e12 (or 9e18) instances without properties
+// hung for minutes; such an element stores nothing and is now skipped at once.
+TEST_F(MeshIOTest, PlyHugeElementWithoutPropertiesDoesNotHang)
+{
+    for (const char* count : {"1000000000000", "9000000000000000000", "9223372036854775807"}) {
+        writeText(mDir.file("huge.ply"), plyTetraWithElement(count));
+        const Surface<3> s = readMesh(mDir.file("huge.ply"));
+        EXPECT_EQ(s.points.size(), 4u) << count;
+        EXPECT_EQ(s.elements.size(), 4u) << count;
+    }
+    // With a property, such a count is more than the data can hold.
+    writeText(mDir.file("huge_prop.ply"),
+              plyTetraWithElement("1000000000000", "property uchar flag\n"));
+    auto mesh = [](const std::string& p) { readMesh(p); };
+    expectError<openvdb::ValueError>(mesh, mDir.file("huge_prop.ply"),
+                                     "more than the data can hold");
+}
+
+// Found by review while writing the fuzz targets: an ascii list length of 1e300 was converted
+// to an integer (undefined behaviour) before the data ran out.
+TEST_F(MeshIOTest, PlyHugeListLengthIsAnError)
+{
+    std::string ply = plyTetraWithElement("0");
+    ply.replace(ply.find("3 0 2 1"), 1, "1e300");
+    writeText(mDir.file("list.ply"), ply);
+    auto mesh = [](const std::string& p) { readMesh(p); };
+    expectError<openvdb::ValueError>(mesh, mDir.file("list.ply"),
+                                     "unexpected end of the data: a list of element 'face' "
+                                     "claims 1e+300 entries");
+}
+
+// NaN coordinates broke the ordering with which STL vertices are welded (std::sort with an
+// inconsistent comparison may read out of bounds); every reader rejects non-finite values.
+TEST_F(MeshIOTest, NonFiniteCoordinatesAreErrors)
+{
+    auto mesh = [](const std::string& p) { readMesh(p); };
+    auto poly = [](const std::string& p) { readPolyline(p); };
+    Surface<3> cube = cubeMesh();
+    cube.points[3][1] = std::numeric_limits<double>::quiet_NaN();
+    writeText(mDir.file("nan_binary.stl"), binaryStl(cube));
+    expectError<openvdb::ValueError>(mesh, mDir.file("nan_binary.stl"), "non-finite");
+    writeText(mDir.file("nan_ascii.stl"), asciiStl(cube));
+    expectError<openvdb::ValueError>(mesh, mDir.file("nan_ascii.stl"), "non-finite");
+    cube.points[3][1] = std::numeric_limits<double>::infinity();
+    writeText(mDir.file("inf_binary.stl"), binaryStl(cube));
+    expectError<openvdb::ValueError>(mesh, mDir.file("inf_binary.stl"), "non-finite");
+    std::string ply = plyTetraWithElement("0");
+    ply.replace(ply.find("0 0 1\n"), 5, "0 0 inf");
+    writeText(mDir.file("inf.ply"), ply);
+    expectError<openvdb::ValueError>(mesh, mDir.file("inf.ply"), "non-finite");
+    writeText(mDir.file("nan.polyline"), "0 0\n1 0\nnan 1\n");
+    expectError<openvdb::ValueError>(poly, mDir.file("nan.polyline"), "non-finite");
+}
+
+// Issue 10, part 6: an STL header claiming 4e9 triangles (the most a binary STL can declare)
+// is not taken as binary (the size does not match) and is rejected without allocating.
+TEST_F(MeshIOTest, StlHugeTriangleCountIsAnError)
+{
+    std::string stl = binaryStl(cubeMesh());
+    const uint32_t huge = 0xffffffffu;
+    std::memcpy(&stl[80], &huge, sizeof(huge));
+    writeText(mDir.file("huge.stl"), stl);
+    auto mesh = [](const std::string& p) { readMesh(p); };
+    expectError<openvdb::ValueError>(mesh, mDir.file("huge.stl"), "does not match 84 + 50");
 }

@@ -13,6 +13,7 @@
 #include <vdbmatch/io/MeshIO.h>
 #include <vdbmatch/io/PointTable.h>
 #include <vdbmatch/io/ShapeIO.h>
+#include <vdbmatch/io/VdbFileCheck.h>
 #include <vdbmatch/transport/GridTransport.h>
 #include <vdbmatch/transport/MeshTransport.h>
 
@@ -299,6 +300,8 @@ applyToGrids(const ApplyCliOptions& o, const DeformationField& phi,
 {
     say("reading " + o.input);
     requireFile(o.input);
+    // Lengths, counts and offsets against the file size before OpenVDB allocates from them.
+    checkVdbFileStructure(o.input, "'" + o.input + "'");
     openvdb::GridPtrVecPtr grids;
     openvdb::MetaMap::Ptr fileMeta;
     try {

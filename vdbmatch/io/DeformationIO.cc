@@ -1,6 +1,8 @@
 /// @file DeformationIO.cc
 #include "DeformationIO.h"
 
+#include "VdbFileCheck.h"
+
 #include <vdbmatch/multiscale/Prolongation.h>
 
 #include <openvdb/Exceptions.h>
@@ -113,6 +115,8 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
 openvdb::Vec3SGrid::Ptr
 readDeformation(const std::string& path)
 {
+    // Lengths and offsets against the file size before OpenVDB allocates from them.
+    checkVdbFileStructure(path, "readDeformation: cannot read '" + path + "':");
     openvdb::GridBase::Ptr base;
     try {
         openvdb::io::File file(path);

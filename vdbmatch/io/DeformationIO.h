@@ -47,7 +47,8 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                     const UnitBoxPlacement& placement, int outputLevel = 0, bool threaded = true);
 
 /// Reads the displacement grid of a deformation file.
-/// @throw openvdb::IoError if the file cannot be read
+/// @throw openvdb::IoError if the file cannot be read, or is truncated or corrupt (see
+///        checkVdbFileStructure)
 /// @throw openvdb::ValueError if it holds no Vec3SGrid named "displacement", the transform is
 ///        not linear with uniform voxels, or a value is not finite
 openvdb::Vec3SGrid::Ptr readDeformation(const std::string& path);

@@ -3,6 +3,7 @@
 #include "LevelSetIO.h"
 
 #include "AtomicFile.h"
+#include "VdbFileCheck.h"
 
 #include <openvdb/io/File.h>
 
@@ -154,6 +155,9 @@ readLevelSet(const std::string& path, const std::string& gridName)
     if (std::filesystem::is_directory(status)) {
         OPENVDB_THROW(openvdb::IoError, where + " is a directory");
     }
+    // OpenVDB allocates from the lengths in the file before reading the bytes (a truncated
+    // file made it allocate gigabytes): check them against the file size first.
+    checkVdbFileStructure(path, where);
 
     openvdb::io::File file(path);
     openvdb::GridPtrVecPtr metadata;

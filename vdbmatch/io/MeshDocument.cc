@@ -15,6 +15,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <sstream>
 #include <string_view>
 #include <system_error>
 
@@ -615,12 +616,24 @@ MeshDocument::parsePly()
                 mNormalLayout.slots.resize(std::size_t(e.count) * 3);
             }
         }
+        // An element without properties stores nothing: do not count through its instances
+        // (a header may claim 9e18 of them).
+        if (e.properties.empty()) continue;
         for (uint64_t n = 0; n < e.count; ++n) {
             for (std::size_t k = 0; k < e.properties.size(); ++k) {
                 const PlyProperty& prop = e.properties[k];
                 if (prop.isList) {
                     const double count = body.read(prop.countType);
                     if (count < 0.0) error("negative list length in element '" + e.name + "'");
+                    // Every entry takes at least one byte or character: a longer list runs past the
+                    // end.
+                    if (count > double(body.remaining())) {
+                        std::ostringstream m;
+                        m << "unexpected end of the data: a list of element '" << e.name
+                          << "' claims " << count << " entries, more than the " << body.remaining()
+                          << " bytes left";
+                        error(m.str());
+                    }
                     body.skip(prop.type, uint64_t(count));
                     continue;
                 }

@@ -8,6 +8,7 @@
 #include <array>
 #include <cctype>
 #include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
@@ -448,6 +449,9 @@ parsePly(const std::string& text, const ParseError& error)
             s.points.reserve(size_t(e.count));
         }
         if (isFace && indices < 0) error("the face element has no vertex_indices list");
+        // An element without properties stores nothing: do not count through its instances
+        // (a header may claim 9e18 of them).
+        if (e.properties.empty()) continue;
         for (uint64_t n = 0; n < e.count; ++n) {
             Vec<3> p = Vec<3>::Zero();
             for (size_t k = 0; k < e.properties.size(); ++k) {
@@ -460,6 +464,14 @@ parsePly(const std::string& text, const ParseError& error)
                 }
                 const double count = body.read(prop.countType);
                 if (!(count >= 0.0)) error("negative list length in element '" + e.name + "'");
+                // Every entry takes at least one byte or character: a longer list runs past the
+                // end.
+                if (count > double(body.remaining())) {
+                    std::ostringstream m;
+                    m << "unexpected end of the data: a list of element '" << e.name << "' claims "
+                      << count << " entries, more than the " << body.remaining() << " bytes left";
+                    error(m.str());
+                }
                 const bool keep = isFace && int(k) == indices;
                 if (keep) polygon.clear();
                 for (uint64_t i = 0; i < uint64_t(count); ++i) {
@@ -516,6 +528,23 @@ weld(const std::vector<Vec<3>>& soup)
     return s;
 }
 
+/// Rejects NaN and inf coordinates (welding sorts the points: NaN breaks the ordering).
+template <int D>
+void
+checkFinite(const std::vector<Vec<D>>& points, const ParseError& error)
+{
+    for (size_t i = 0; i < points.size(); ++i) {
+        // std::isfinite per coordinate: Eigen's allFinite() computes x - x, which traps with
+        // floating-point exceptions enabled (the tests' debug builds).
+        bool finite = true;
+        for (int a = 0; a < D; ++a)
+            finite = finite && std::isfinite(points[i][a]);
+        if (!finite) {
+            error("point " + std::to_string(i) + " has a non-finite coordinate (NaN or inf)");
+        }
+    }
+}
+
 Surface<3>
 parseStl(const std::string& text, const ParseError& error)
 {
@@ -548,6 +577,7 @@ parseStl(const std::string& text, const ParseError& error)
                 soup.push_back(p);
             }
         }
+        checkFinite(soup, error);
         return weld(soup);
     }
     if (text.compare(0, 5, "solid") != 0) {
@@ -575,6 +605,7 @@ parseStl(const std::string& text, const ParseError& error)
         }
     }
     if (inFacet != 0) error("the last facet is incomplete");
+    checkFinite(soup, error);
     return weld(soup);
 }
 
@@ -595,6 +626,7 @@ readMesh(const std::string& path)
         s = parseStl(text, error);
     else
         error("unknown mesh extension '" + ext + "' (expected .obj, .ply or .stl)");
+    checkFinite(s.points, error);
     checkSurface(s, "readMesh: file " + quoted(path));
     return s;
 }
@@ -643,6 +675,7 @@ readPolyline(const std::string& path)
         s.points.push_back(p);
     }
     closeCurve(lines.lineNumber());
+    checkFinite(s.points, error);
     checkSurface(s, "readPolyline: file " + quoted(path));
     return s;
 }

@@ -1,0 +1,15 @@
+/// @file FuzzMeshPly.cc
+/// @brief libFuzzer target: the bytes are a .ply file given to readMesh (ascii or binary,
+/// either endianness, as the header says).
+#include "FuzzCommon.h"
+
+#include <vdbmatch/io/MeshIO.h>
+
+extern "C" int
+LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size)
+{
+    static vdbmatch::fuzz::ScratchFile file("mesh", ".ply");
+    const std::string& path = file.write(data, size);
+    vdbmatch::fuzz::expectNoCrash([&] { vdbmatch::readMesh(path); });
+    return 0;
+}
