@@ -8,10 +8,10 @@
 
 #include <filesystem>
 #include <new>
-#include <sstream>
-#include <vector>
 #include <ostream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 namespace vdbmatch {
 namespace cli {
@@ -126,7 +126,8 @@ helpText()
     s += "Usage:\n";
     s += "  vdb_match SOURCE TARGET -o OUTDIR [options]   (same as: vdb_match match ...)\n";
     for (const CommandInfo& c : commands()) {
-        if (std::string(c.name) != "match") s += "  vdb_match " + std::string(c.usage) + " [options]\n";
+        if (std::string(c.name) != "match")
+            s += "  vdb_match " + std::string(c.usage) + " [options]\n";
     }
     s += "  vdb_match COMMAND --help                      (the options of one command)\n";
     s += "  vdb_match --help | --version\n\n";
