@@ -355,6 +355,9 @@ TEST_F(LevelSetIOTest, FuzzedFilesAreIoErrors)
         {"vdb_version0_timeout.vdb", "file format version 0 is not supported"},
         // Found by the fuzzer: a root tile count of 3.9e9 (a 10 s+ loop in RootNode).
         {"vdb_root_tiles_timeout.vdb", "root tiles"},
+        // Found by the fuzzer (second run): a fixed-size metadata value whose stored byte count
+        // differs from its size; OpenVDB then read a 1.7 GB name length (9.4 GB resident).
+        {"vdb_metadata_size_mismatch_oom.vdb", "value of"},
         // Crafted from a valid file: one field changed each.
         {"vdb_root_children_4e9.vdb", "4294967295 children"},
         {"vdb_root_tiles_4e9.vdb", "4294967295 root tiles"},

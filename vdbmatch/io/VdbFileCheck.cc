@@ -94,6 +94,21 @@ mapBytes(const std::string& mapType)
     return 0;
 }
 
+/// Bytes of a metadata value of a fixed-size type (openvdb/Metadata.h, registered types);
+/// 0 for strings and other types, whose size the stored byte count gives.
+std::uint64_t
+fixedMetadataBytes(const std::string& type)
+{
+    static const std::pair<const char*, std::uint64_t> table[] = {
+        {"bool", 1},   {"int32", 4},  {"int64", 8},  {"float", 4},  {"double", 8}, {"vec2i", 8},
+        {"vec2s", 8},  {"vec2d", 16}, {"vec3i", 12}, {"vec3s", 12}, {"vec3d", 24}, {"vec4i", 16},
+        {"vec4s", 16}, {"vec4d", 32}, {"mat4s", 64}, {"mat4d", 128}};
+    for (const auto& [name, bytes] : table) {
+        if (type == name) return bytes;
+    }
+    return 0;
+}
+
 /// Reads little-endian fields of a file, checking each against the file size.
 class BoundedReader
 {
@@ -180,8 +195,17 @@ public:
         }
         for (std::uint32_t i = 0; i < count; ++i) {
             skipString(what);
-            skipString(what);
-            skipString(what); // the value: Index32 byte count, then the bytes
+            const std::string type = shortString(MAX_TYPE_NAME_BYTES, what);
+            // The value: Index32 byte count, then the bytes. OpenVDB reads sizeof(T) for a
+            // fixed-size type whatever the count says (TypedMetadata::readValue): a count that
+            // differs would make it read the next item from other bytes than this check.
+            const std::uint32_t n = value<std::uint32_t>(what);
+            const std::uint64_t fixed = fixedMetadataBytes(type);
+            if (fixed > 0 && n != fixed) {
+                fail(std::string("is corrupt: ") + what + " has a '" + type + "' value of " +
+                     std::to_string(n) + " bytes, expected " + std::to_string(fixed));
+            }
+            skip(n, what);
         }
     }
 
