@@ -152,6 +152,15 @@ jsonVec(const openvdb::Vec3d& v)
     return Json::array({v[0], v[1], v[2]});
 }
 
+Json
+energyParametersJson(const EnergyParameters& p)
+{
+    return Json{{"cMatch", p.cMatch}, {"cMem", p.cMem},
+                {"cBend", p.cBend},   {"cVol", p.cVol},
+                {"q", p.q},           {"theta", p.theta},
+                {"tau", p.tau},       {"sigmaFactor", p.sigmaFactor}};
+}
+
 std::string
 dumpJson(const Json& j)
 {

@@ -168,15 +168,8 @@ printJson(std::ostream& out, const EnergyOptions& o, const InputInfo (&in)[2],
     j["placement"] = Json{{"worldOrigin", jsonVec(placement.worldOrigin)},
                           {"scale", placement.scale},
                           {"margin", placement.margin}};
-    j["parameters"] = Json{{"cMatch", p.cMatch},
-                           {"cMem", p.cMem},
-                           {"cBend", p.cBend},
-                           {"cVol", p.cVol},
-                           {"q", p.q},
-                           {"theta", p.theta},
-                           {"tau", p.tau},
-                           {"sigmaFactor", p.sigmaFactor},
-                           {"hessianSmoothing", o.hessianSmoothing}};
+    j["parameters"] = energyParametersJson(p);
+    j["parameters"]["hessianSmoothing"] = o.hessianSmoothing;
     j["level"] = o.level;
     j["h"] = h;
     j["sigma"] = sigma;

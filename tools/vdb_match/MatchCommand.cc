@@ -606,29 +606,23 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
                           {"scale", r.placement.scale},
                           {"margin", r.placement.margin}};
-    j["parameters"] = Json{{"energy", toString(opts.multiscale.kind)},
-                           {"cMatch", p.cMatch},
-                           {"cMem", p.cMem},
-                           {"cBend", p.cBend},
-                           {"cVol", p.cVol},
-                           {"q", p.q},
-                           {"theta", p.theta},
-                           {"tau", p.tau},
-                           {"sigmaFactor", p.sigmaFactor},
-                           {"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
-                           {"minLevel", opts.multiscale.minLevel},
-                           {"maxLevel", opts.multiscale.maxLevel},
-                           {"margin", opts.margin},
-                           {"refinementMarginCells", opts.refinementMarginCells},
-                           {"metricTauFactor", opts.multiscale.metricTauFactor},
-                           {"optimizer", solver::toString(descent.method)},
-                           {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
-                           {"metricTolerance", opts.multiscale.metric.cgTolerance},
-                           {"maxIterations", descent.maxIterations},
-                           {"energyTolerance", descent.energyTolerance},
-                           {"settleTolerance", descent.settleTolerance},
-                           {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
-                           {"relativeGradientTolerance", descent.relativeGradientTolerance}};
+    Json& params = j["parameters"];
+    params["energy"] = toString(opts.multiscale.kind);
+    params.update(energyParametersJson(p));
+    params.update(Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
+                       {"minLevel", opts.multiscale.minLevel},
+                       {"maxLevel", opts.multiscale.maxLevel},
+                       {"margin", opts.margin},
+                       {"refinementMarginCells", opts.refinementMarginCells},
+                       {"metricTauFactor", opts.multiscale.metricTauFactor},
+                       {"optimizer", solver::toString(descent.method)},
+                       {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
+                       {"metricTolerance", opts.multiscale.metric.cgTolerance},
+                       {"maxIterations", descent.maxIterations},
+                       {"energyTolerance", descent.energyTolerance},
+                       {"settleTolerance", descent.settleTolerance},
+                       {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
+                       {"relativeGradientTolerance", descent.relativeGradientTolerance}});
     Json levels = Json::array();
     for (const LevelSummary& l : r.levels) {
         const solver::Report& rep = l.report;
