@@ -10,6 +10,7 @@
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 
@@ -237,21 +238,65 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 lipschitz =
                     lipschitzBound<D>(*context.previousLattice, *context.previousDisplacement);
             }
+            // Centroids of the Kuhn simplices of a cell of side 1, from its origin.
+            std::array<Vec<D>, SimplexLattice<D>::SIMPLICES> centroidOffsets;
+            for (std::size_t p = 0; p < centroidOffsets.size(); ++p) {
+                centroidOffsets[p].setZero();
+                for (int m = 0; m <= D; ++m)
+                    for (int a = 0; a < D; ++a)
+                        if (KuhnSplit<D>::path()[p][m] & (1 << a)) centroidOffsets[p][a] += 1;
+                centroidOffsets[p] /= Real(D + 1);
+            }
             const FieldSampler<D>& d1 = *level.shape1;
             const FieldSampler<D>& d2 = *level.shape2;
             const NodeVectors<D>* uPrev = context.previousDisplacement;
-            const RefinementPredicate<D> needsFine = [&](const Vec<D>& c, Real radius) {
+            // A point x needs cells of side h if |d1(x)| < reach1 or |d2(phi_{l-1}(x))| <
+            // reach2.
+            auto pointNeedsFine = [&](const Vec<D>& x) {
                 Real d;
-                if (!d1.sampleDistance(c, d) || std::abs(d) < reach1 + radius + tierSlack(d1, c)) {
-                    return true;
-                }
-                Vec<D> y = c;
+                if (!d1.sampleDistance(x, d) || std::abs(d) < reach1) return true;
+                Vec<D> y = x;
                 if (previous) {
                     Vec<D> du;
-                    if (previous->evaluate(*uPrev, c, du)) y += du;
+                    if (previous->evaluate(*uPrev, x, du)) y += du;
                 }
-                return !d2.sampleDistance(y, d) ||
-                       std::abs(d) < reach2 + lipschitz * radius + tierSlack(d2, y);
+                return !d2.sampleDistance(y, d) || std::abs(d) < reach2;
+            };
+            const RefinementPredicate<D> needsFine = [&](const Vec<D>& c, Real radius) {
+                // Conservative test on the circumscribed ball (1-Lipschitz d1 and d2, phi
+                // Lipschitz with constant `lipschitz`): false means no point of the cell needs
+                // side h.
+                Real d;
+                bool near = !d1.sampleDistance(c, d) ||
+                            std::abs(d) < reach1 + radius + tierSlack(d1, c);
+                if (!near) {
+                    Vec<D> y = c;
+                    if (previous) {
+                        Vec<D> du;
+                        if (previous->evaluate(*uPrev, c, du)) y += du;
+                    }
+                    near = !d2.sampleDistance(y, d) ||
+                           std::abs(d) < reach2 + lipschitz * radius + tierSlack(d2, y);
+                }
+                if (!near) return false;
+                // The last split (a cell of side 2h into cells of side h): the band terms are
+                // evaluated at simplex centroids (one-point quadrature), so the cell is split
+                // only if a quadrature point of its own simplices or of its children's needs
+                // side h. Whatever is not split then carries no band term at the start of the
+                // level.
+                const Real side = 2 * radius / std::sqrt(Real(D));
+                if (side > 2.5 * h) return true;
+                const Vec<D> origin = c - Vec<D>::Constant(side / 2);
+                for (const Vec<D>& offset : centroidOffsets)
+                    if (pointNeedsFine(origin + side * offset)) return true;
+                for (int child = 0; child < (1 << D); ++child) {
+                    Vec<D> childOrigin = origin;
+                    for (int a = 0; a < D; ++a)
+                        if (child & (1 << a)) childOrigin[a] += side / 2;
+                    for (const Vec<D>& offset : centroidOffsets)
+                        if (pointNeedsFine(childOrigin + (side / 2) * offset)) return true;
+                }
+                return false;
             };
             level.lattice = std::make_shared<SimplexLattice<D>>(
                 buildAdaptiveLattice<D>(l, std::max(0, l - coarsestLevel), needsFine,

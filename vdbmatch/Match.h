@@ -10,9 +10,13 @@
 /// 2. the lattice is refined to cells of side h_l where a band term can live, i.e. near M1 and
 ///    near phi_{l-1}^{-1}(M2) (phi_{l-1} the result of the previous level, Id at minLevel):
 ///    a cell is fine if |d1| < sigma or |d2 o phi_{l-1}| < sigma + refinementMarginCells h_l at
-///    some point of it (tested on balls around cell centres with the 1-Lipschitz distances and
-///    the Lipschitz constant of phi_{l-1}, lipschitzBound). The first region is exact: the
-///    direct band does not move. The margin of the second allows phi to move during the level;
+///    a band quadrature point (simplex centroid) it would carry. Larger cells are split when the
+///    ball around their centre may reach that region (1-Lipschitz distances, the Lipschitz
+///    constant of phi_{l-1}, lipschitzBound); the last split, of a cell of side 2h into cells of
+///    side h, samples the centroids of the cell's own simplices and of its children's, so that
+///    cells of side h cover the bands and little more (3.4x fewer than the ball test at level 7
+///    of the starfish pair, docs/performance.md). The first region is exact: the direct band
+///    does not move. The margin of the second allows phi to move during the level;
 ///    EnergyTerms::coarseBandSimplices (report.json) counts the band simplices that fell
 ///    outside the fine region anyway (0 on the bundled pairs). Elsewhere cells grow by 2:1 up to
 ///    the side h_{minLevel} of the first level (buildAdaptiveLattice). No new cell is larger than
