@@ -1,5 +1,6 @@
 /// @file Cli.h
-/// @brief The vdb_match command line: option table, parsing, help, and the subcommands.
+/// @brief The vdb_match command line: one option table per command (parsed with CLI11, which also
+///        renders its help page), dispatch, and the subcommands.
 ///
 /// Usage: `vdb_match [match] SOURCE TARGET -o OUTDIR [options]`,
 /// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`,

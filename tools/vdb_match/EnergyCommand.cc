@@ -32,6 +32,12 @@ energyOptionTable()
     const EnergyParameters& p = d.params;
     // clang-format off
     return {
+        {"--source", "FILE", "Input",
+         "the source shape M1, instead of the first positional argument",
+         [](EnergyOptions& o, const std::string& v) { o.source = v; }},
+        {"--target", "FILE", "Input",
+         "the target shape M2, instead of the second positional argument",
+         [](EnergyOptions& o, const std::string& v) { o.target = v; }},
         {"--grid", "NAME", "Input",
          "grid to read from both files (default: the only float grid of each file)",
          [](EnergyOptions& o, const std::string& v) { o.grid = v; }},
@@ -304,12 +310,7 @@ parseEnergyOptions(int argc, const char* const* argv, int first)
     const std::vector<Option<EnergyOptions>> table = energyOptionTable();
     EnergyOptions o;
     const std::vector<std::string> positional = parseOptions(table, argc, argv, first, o);
-    if (positional.size() != 2) {
-        throw UsageError("energy expects SOURCE.vdb TARGET.vdb, got " +
-                         std::to_string(positional.size()) + " file argument(s)");
-    }
-    o.source = positional[0];
-    o.target = positional[1];
+    assignInputs(positional, o.source, o.target, "energy expects SOURCE.vdb TARGET.vdb");
     if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
         throw UsageError("--grid cannot be combined with --source-grid or --target-grid");
     }

@@ -91,9 +91,15 @@ matchOptionTable()
     using O = MatchCliOptions;
     // clang-format off
     return {
-        {"--output", "OUTDIR", "Input and output",
-         "output directory, created if missing; existing outputs are replaced (required; also -o)",
+        {"--output,-o", "OUTDIR", "Input and output",
+         "output directory, created if missing; existing outputs are replaced (required)",
          [](O& o, const std::string& v) { o.outDir = v; }},
+        {"--source", "FILE", "Input and output",
+         "the source shape M1, instead of the first positional argument",
+         [](O& o, const std::string& v) { o.source = v; }},
+        {"--target", "FILE", "Input and output",
+         "the target shape M2, instead of the second positional argument",
+         [](O& o, const std::string& v) { o.target = v; }},
         {"--grid", "NAME", "Input and output",
          "grid to read from .vdb inputs (default: the only float grid of each file)",
          [](O& o, const std::string& v) { o.grid = v; }},
@@ -326,7 +332,7 @@ applyConfig(const std::string& path, MatchCliOptions& o)
         }
         const std::string valueText = value.is_string() ? value.get<std::string>() : value.dump();
         for (const Option<MatchCliOptions>& opt : table) {
-            if (std::string(opt.name) != option) continue;
+            if (canonicalName(opt.name) != option) continue;
             try {
                 opt.apply(o, valueText);
             } catch (const UsageError& e) {
@@ -351,12 +357,7 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (!o.config.empty()) applyConfig(o.config, o);
     const std::vector<std::string> positional =
         parseOptions(matchOptionTable(), argc, argv, first, o);
-    if (positional.size() != 2) {
-        throw UsageError("expected SOURCE TARGET, got " + std::to_string(positional.size()) +
-                         " file argument(s) (see vdb_match --help)");
-    }
-    o.source = positional[0];
-    o.target = positional[1];
+    assignInputs(positional, o.source, o.target, "expected SOURCE TARGET");
     if (o.outDir.empty()) throw UsageError("missing the output directory: -o OUTDIR");
     if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
         throw UsageError("--grid cannot be combined with --source-grid or --target-grid");
