@@ -108,7 +108,7 @@ exitCodeHelp()
                        "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
                        "shapes that do not fit the domain, not a deformation grid, a slice "
                        "position outside the domain, parameter out of range (levels: finest 9 "
-                       "in 3D, 12 in 2D)");
+                       "in 3D, 12 in 2D), an --init result of other inputs or that folds");
     s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
     s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
                        "as interrupted");

@@ -13,6 +13,7 @@
 #include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
+#include <vdbmatch/io/InitialDeformation.h>
 #include <vdbmatch/io/InverseGrid.h>
 #include <vdbmatch/io/JacobianGrid.h>
 #include <vdbmatch/io/LevelSetIO.h>
@@ -69,6 +70,7 @@ struct MatchCliOptions
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
     std::string config;        ///< --config FILE (applied before the other options)
+    std::string init;          ///< --init DEFORMATION.vdb: start from an earlier result
     bool writeInverse = true;  ///< inverse.vdb
     bool writeJacobian = true; ///< jacobian.vdb
     bool logJacobian = false;  ///< jacobian.vdb holds log det
@@ -115,6 +117,11 @@ matchOptionTable()
          "parameters from a JSON file: a report.json (its \"parameters\") or an object with those "
          "keys; options on the command line override it",
          [](O& o, const std::string& v) { o.config = v; }},
+        {"--init", "DEFORMATION.vdb", "Input and output",
+         "start from an earlier result of the same SOURCE and TARGET (its deformation.vdb): the "
+         "run starts at the first level finer than that result's finest (the same level if it "
+         "was interrupted; the last requested level if it is already as fine)",
+         [](O& o, const std::string& v) { o.init = v; }},
         {"--no-inverse", nullptr, "Input and output",
          "do not write inverse.vdb (the exact inverse phi^-1 at every node)",
          [](O& o, const std::string&) { o.writeInverse = false; }},
@@ -592,7 +599,7 @@ template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
            const MatchResult<D>& r, const std::string& status, double writeSeconds,
-           const ExtraOutputs& extra)
+           const ExtraOutputs& extra, const InitialDeformation* init)
 {
     const EnergyParameters& p = opts.multiscale.energy;
     const solver::DescentOptions& descent = opts.multiscale.descent;
@@ -607,23 +614,35 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
                           {"scale", r.placement.scale},
                           {"margin", r.placement.margin}};
+    if (init) {
+        j["init"] = Json{
+            {"path", o.init},
+            {"levels", std::to_string(init->firstLevel) + ".." + std::to_string(init->finestLevel)},
+            {"gridLevel", init->gridLevel},
+            {"interrupted", init->interrupted},
+            {"startLevel", opts.multiscale.minLevel},
+            {"lipschitz", init->start->lipschitz}};
+    } else {
+        j["init"] = nullptr;
+    }
     Json& params = j["parameters"];
     params["energy"] = toString(opts.multiscale.kind);
     params.update(energyParametersJson(p));
-    params.update(Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
-                       {"minLevel", opts.multiscale.minLevel},
-                       {"maxLevel", opts.multiscale.maxLevel},
-                       {"margin", opts.margin},
-                       {"refinementMarginCells", opts.refinementMarginCells},
-                       {"metricTauFactor", opts.multiscale.metricTauFactor},
-                       {"optimizer", solver::toString(descent.method)},
-                       {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
-                       {"metricTolerance", opts.multiscale.metric.cgTolerance},
-                       {"maxIterations", descent.maxIterations},
-                       {"energyTolerance", descent.energyTolerance},
-                       {"settleTolerance", descent.settleTolerance},
-                       {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
-                       {"relativeGradientTolerance", descent.relativeGradientTolerance}});
+    params.update(
+        Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
+             {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
+             {"maxLevel", opts.multiscale.maxLevel},
+             {"margin", opts.margin},
+             {"refinementMarginCells", opts.refinementMarginCells},
+             {"metricTauFactor", opts.multiscale.metricTauFactor},
+             {"optimizer", solver::toString(descent.method)},
+             {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
+             {"metricTolerance", opts.multiscale.metric.cgTolerance},
+             {"maxIterations", descent.maxIterations},
+             {"energyTolerance", descent.energyTolerance},
+             {"settleTolerance", descent.settleTolerance},
+             {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
+             {"relativeGradientTolerance", descent.relativeGradientTolerance}});
     Json levels = Json::array();
     for (const LevelSummary& l : r.levels) {
         const solver::Report& rep = l.report;
@@ -750,11 +769,31 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     const Surface<D>& target = surfaceOf<D>(in[1]);
     const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
 
+    // --init: an earlier result of these inputs; the run starts after its finest level (or at
+    // the last requested one), with cells no coarser than those of the requested first level.
+    std::optional<InitialDeformation> init;
+    if (!o.init.empty()) {
+        if (!o.quiet) err << PROGRAM << ": reading " << o.init << std::endl;
+        init = readInitialDeformation(o.init, placement, D);
+        const int firstRequested = opts.multiscale.minLevel;
+        opts.coarsestLevel = firstRequested;
+        opts.multiscale.minLevel =
+            std::max(firstRequested, std::min(init->nextLevel(), opts.multiscale.maxLevel));
+        opts.initial = init->start;
+        opts.validate(D);
+        checkInterrupted();
+    }
+
     ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
                      "D, " + toString(opts.multiscale.kind) + " energy, levels " +
                      std::to_string(opts.multiscale.minLevel) + ".." +
-                     std::to_string(opts.multiscale.maxLevel) + ")");
+                     std::to_string(opts.multiscale.maxLevel) +
+                     (init ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) +
+                                 ".." + std::to_string(init->finestLevel) +
+                                 (init->interrupted ? ", interrupted" : "") + ")"
+                           : std::string()) +
+                     ")");
     MatchObserver observer;
     observer.levelStart = [&](const LevelSummary& s) {
         progress.levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
@@ -781,8 +820,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformation->insertMeta("vdbmatch_energy",
                             openvdb::StringMetadata(toString(opts.multiscale.kind)));
     deformation->insertMeta(
-        "vdbmatch_levels", openvdb::StringMetadata(std::to_string(opts.multiscale.minLevel) + ".." +
-                                                   std::to_string(result.lattice->level())));
+        "vdbmatch_levels",
+        openvdb::StringMetadata(
+            std::to_string(opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel) +
+            ".." + std::to_string(result.lattice->level())));
+    if (init) deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
@@ -911,7 +953,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                : converged ? "converged"
                                            : "not converged";
     const double writeSeconds = secondsSince(writeStart);
-    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds, extra);
+    const std::string report =
+        reportJson<D>(o, opts, in, result, status, writeSeconds, extra, init ? &*init : nullptr);
     writeFileAtomically((fs::path(dir) / "report.json").string(),
                         [&](std::ostream& os) { os << report; });
 
