@@ -39,9 +39,11 @@ commands()
          "one-voxel-thick slice is a 2D shape), meshes (.obj, .ply, .stl), closed 2D polylines "
          "(.polyline, .txt)",
          &matchOptionHelp},
-        {"energy", "energy SOURCE.vdb TARGET.vdb",
-         "place both level sets in the unit box, resample them at --level and print the terms "
-         "of the matching energy of the identity deformation (phi = Id)",
+        {"energy", "energy SOURCE TARGET",
+         "read both shapes as match does (level sets, one-voxel-thick slices as 2D shapes, "
+         "meshes, polylines), place them in the unit box, build their distance fields at --level "
+         "as match does at that level, and print the terms of the matching energy of the "
+         "identity deformation (phi = Id) on the dense lattice of that level",
          &energyOptionHelp},
         {"consistency", "consistency PHI.vdb PSI.vdb --source M1 --target M2",
          "measure a pair of deformations of M1 -> M2 (PHI) and M2 -> M1 (PSI), as the paper's "

@@ -336,6 +336,15 @@ assignInputs(const std::vector<std::string>& positional, std::string& source, st
     if (target.empty()) target = positional[next++];
 }
 
+Shape
+readInputShape(const std::string& path, const std::string& gridName)
+{
+    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
+        throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
+    }
+    return readShape(path, gridName);
+}
+
 std::string
 renderOptionHelp(const std::vector<BoundOption>& options)
 {

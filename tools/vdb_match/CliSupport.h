@@ -5,6 +5,8 @@
 
 #include "Cli.h"
 
+#include <vdbmatch/io/ShapeIO.h>
+
 #include <openvdb/openvdb.h>
 #include <openvdb/util/NullInterrupter.h>
 
@@ -112,6 +114,12 @@ optionHelp(const std::vector<Option<T>>& table)
 /// order. @throw UsageError "WHAT, got N file argument(s)" unless the counts agree
 void assignInputs(const std::vector<std::string>& positional, std::string& source,
                   std::string& target, const std::string& what);
+
+/// Reads one input shape exactly as `match` does (readShape: .vdb level sets and one-layer 2D
+/// slices, .obj/.ply/.stl meshes, .polyline/.txt curves); used by `match` and `energy`.
+/// @throw UsageError if @a gridName is given for a file that is not a .vdb
+/// @throw as readShape
+Shape readInputShape(const std::string& path, const std::string& gridName);
 
 /// The command line as typed: argv joined by spaces.
 std::string commandLine(int argc, const char* const* argv);

@@ -388,19 +388,6 @@ parseMatchOptions(int argc, const char* const* argv, int first)
 }
 
 ////////////////////////////////////////////////////////////////////////////////
-// Inputs
-
-/// Reads one input; --grid for a non-.vdb file is a usage error.
-Shape
-readInput(const std::string& path, const std::string& gridName)
-{
-    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
-        throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
-    }
-    return readShape(path, gridName);
-}
-
-////////////////////////////////////////////////////////////////////////////////
 // Progress
 
 std::string
@@ -997,10 +984,10 @@ runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
     };
     Shape in[2];
     say("reading " + o.source);
-    in[0] = readInput(o.source, o.grid.empty() ? o.sourceGrid : o.grid);
+    in[0] = readInputShape(o.source, o.grid.empty() ? o.sourceGrid : o.grid);
     checkInterrupted();
     say("reading " + o.target);
-    in[1] = readInput(o.target, o.grid.empty() ? o.targetGrid : o.grid);
+    in[1] = readInputShape(o.target, o.grid.empty() ? o.targetGrid : o.grid);
     checkInterrupted();
     if (in[0].dim != in[1].dim) {
         OPENVDB_THROW(openvdb::ValueError, "'" << o.source << "' is a " << in[0].dim
