@@ -50,6 +50,7 @@ struct EnergyOptions
     std::string targetGrid;     ///< --target-grid
     int level = 6;              ///< lattice level, h = 2^-level
     double margin = DEFAULT_UNIT_BOX_MARGIN;
+    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     EnergyKind kind = EnergyKind::Symmetric;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     double tau = EnergyParameters().tau;

@@ -337,12 +337,23 @@ assignInputs(const std::vector<std::string>& positional, std::string& source, st
 }
 
 Shape
-readInputShape(const std::string& path, const std::string& gridName)
+readInputShape(const std::string& path, const std::string& gridName, std::optional<double> isoValue)
 {
     if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
         throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
     }
-    return readShape(path, gridName);
+    if (!isLevelSetFile(path)) isoValue.reset(); // meshes and polylines are surfaces already
+    return readShape(path, gridName, isoValue);
+}
+
+void
+checkIsoValueInputs(const std::optional<double>& isoValue, const std::string& source,
+                    const std::string& target)
+{
+    if (isoValue && !isLevelSetFile(source) && !isLevelSetFile(target)) {
+        throw UsageError("--iso-value applies to .vdb densities (fog volumes), and neither input "
+                         "is a .vdb file");
+    }
 }
 
 std::string

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -119,7 +120,14 @@ void assignInputs(const std::vector<std::string>& positional, std::string& sourc
 /// slices, .obj/.ply/.stl meshes, .polyline/.txt curves); used by `match` and `energy`.
 /// @throw UsageError if @a gridName is given for a file that is not a .vdb
 /// @throw as readShape
-Shape readInputShape(const std::string& path, const std::string& gridName);
+/// @a isoValue (--iso-value) converts a .vdb density to the level set of that iso-surface.
+Shape readInputShape(const std::string& path, const std::string& gridName,
+                     std::optional<double> isoValue = std::nullopt);
+
+/// Checks --iso-value against the inputs: it needs a .vdb among them.
+/// @throw UsageError otherwise
+void checkIsoValueInputs(const std::optional<double>& isoValue, const std::string& source,
+                         const std::string& target);
 
 /// The command line as typed: argv joined by spaces.
 std::string commandLine(int argc, const char* const* argv);

@@ -69,6 +69,10 @@ energyOptionTable()
          [](O& o, const std::string& v) { o.sourceGrid = v; }},
         {"--target-grid", "NAME", "Input", "grid to read from TARGET (not with --grid)",
          [](O& o, const std::string& v) { o.targetGrid = v; }},
+        {"--iso-value", "X", "Input",
+         "read .vdb fog volumes (densities) as the level set of their iso-surface at density X, "
+         "inside where the density exceeds X (default: densities are refused)",
+         [](O& o, const std::string& v) { o.isoValue = parseDouble("--iso-value", v); }},
         {"--level", "L", "Domain and resolution",
          "lattice level: h = 2^-L in the unit box, 1.." + std::to_string(MAX_ENERGY_LEVEL_3D) +
              " in 3D, 1.." + std::to_string(MAX_ENERGY_LEVEL_2D) + " in 2D (default " +
@@ -195,11 +199,13 @@ void
 printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const EnergyReport& r)
 {
     auto input = [](const Shape& s) {
-        return Json{{"path", s.path},
-                    {"format", s.format},
-                    {"grid", s.grid},
-                    {"vertices", vertexCount(s)},
-                    {"elements", elementCount(s)}};
+        Json j{{"path", s.path},
+               {"format", s.format},
+               {"grid", s.grid},
+               {"vertices", vertexCount(s)},
+               {"elements", elementCount(s)}};
+        if (s.isoValue) j["isoValue"] = *s.isoValue;
+        return j;
     };
     auto pair = [](const Real* v) { return Json::array({v[0], v[1]}); };
     Json j;
@@ -326,7 +332,7 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
                                   o.grid.empty() ? o.targetGrid : o.grid};
     for (int i = 0; i < 2; ++i) {
         progress("reading " + paths[i]);
-        in[i] = readInputShape(paths[i], names[i]);
+        in[i] = readInputShape(paths[i], names[i], o.isoValue);
         checkInterrupted();
     }
     r.time.read = secondsSince(t0);
@@ -382,6 +388,7 @@ parseEnergyOptions(int argc, const char* const* argv, int first)
     if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
         throw UsageError("--grid cannot be combined with --source-grid or --target-grid");
     }
+    checkIsoValueInputs(o.isoValue, o.source, o.target);
     const std::string names[2] = {o.grid.empty() ? o.sourceGrid : o.grid,
                                   o.grid.empty() ? o.targetGrid : o.grid};
     const std::string paths[2] = {o.source, o.target};

@@ -69,12 +69,13 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
-    std::string config;        ///< --config FILE (applied before the other options)
-    std::string init;          ///< --init DEFORMATION.vdb: start from an earlier result
-    bool writeInverse = true;  ///< inverse.vdb
-    bool writeJacobian = true; ///< jacobian.vdb
-    bool logJacobian = false;  ///< jacobian.vdb holds log det
-    bool half = false;         ///< half-float storage of the vector grids
+    std::string config;             ///< --config FILE (applied before the other options)
+    std::string init;               ///< --init DEFORMATION.vdb: start from an earlier result
+    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
+    bool writeInverse = true;       ///< inverse.vdb
+    bool writeJacobian = true;      ///< jacobian.vdb
+    bool logJacobian = false;       ///< jacobian.vdb holds log det
+    bool half = false;              ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;
@@ -109,6 +110,10 @@ matchOptionTable()
          [](O& o, const std::string& v) { o.sourceGrid = v; }},
         {"--target-grid", "NAME", "Input and output", "grid to read from TARGET (not with --grid)",
          [](O& o, const std::string& v) { o.targetGrid = v; }},
+        {"--iso-value", "X", "Input and output",
+         "read .vdb fog volumes (densities) as the level set of their iso-surface at density X, "
+         "inside where the density exceeds X (default: densities are refused)",
+         [](O& o, const std::string& v) { o.isoValue = parseDouble("--iso-value", v); }},
         {"--deformation-level", "L", "Input and output",
          "node spacing 2^-L of deformation.vdb in the unit box (default: the finest level, "
          "which reproduces phi exactly)",
@@ -380,6 +385,7 @@ parseMatchOptions(int argc, const char* const* argv, int first)
             throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
         }
     }
+    checkIsoValueInputs(o.isoValue, o.source, o.target);
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
@@ -520,11 +526,13 @@ template <int D>
 Json
 inputJson(const Shape& in)
 {
-    return Json{{"path", in.path},
-                {"format", in.format},
-                {"grid", in.grid},
-                {"vertices", surfaceOf<D>(in).points.size()},
-                {"elements", surfaceOf<D>(in).elements.size()}};
+    Json j{{"path", in.path},
+           {"format", in.format},
+           {"grid", in.grid},
+           {"vertices", surfaceOf<D>(in).points.size()},
+           {"elements", surfaceOf<D>(in).elements.size()}};
+    if (in.isoValue) j["isoValue"] = *in.isoValue;
+    return j;
 }
 
 /// An exclusive advisory lock (flock) on OUTDIR/.vdb_match.lock while a match writes there;
@@ -984,10 +992,10 @@ runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
     };
     Shape in[2];
     say("reading " + o.source);
-    in[0] = readInputShape(o.source, o.grid.empty() ? o.sourceGrid : o.grid);
+    in[0] = readInputShape(o.source, o.grid.empty() ? o.sourceGrid : o.grid, o.isoValue);
     checkInterrupted();
     say("reading " + o.target);
-    in[1] = readInputShape(o.target, o.grid.empty() ? o.targetGrid : o.grid);
+    in[1] = readInputShape(o.target, o.grid.empty() ? o.targetGrid : o.grid, o.isoValue);
     checkInterrupted();
     if (in[0].dim != in[1].dim) {
         OPENVDB_THROW(openvdb::ValueError, "'" << o.source << "' is a " << in[0].dim
