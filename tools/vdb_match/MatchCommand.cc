@@ -4,6 +4,7 @@
 ///        (docs/cli.md).
 #include "Cli.h"
 #include "CliSupport.h"
+#include "ConfigFile.h"
 
 #include <vdbmatch/Match.h>
 #include <vdbmatch/eval/Consistency.h>
@@ -259,96 +260,19 @@ matchOptionTable()
     // clang-format on
 }
 
-/// The keys of report.json's "parameters" that --config accepts, with the option each sets.
-const std::vector<std::pair<const char*, const char*>>&
-configKeys()
-{
-    static const std::vector<std::pair<const char*, const char*>> keys = {
-        {"energy", "--energy"},
-        {"cMatch", "--c-match"},
-        {"cMem", "--c-mem"},
-        {"cBend", "--c-bend"},
-        {"cVol", "--c-vol"},
-        {"q", "--q"},
-        {"theta", "--theta"},
-        {"tau", "--tau"},
-        {"hessianSmoothing", "--hessian-smoothing"},
-        {"minLevel", "--min-level"},
-        {"maxLevel", "--max-level"},
-        {"margin", "--margin"},
-        {"refinementMarginCells", "--refine-margin"},
-        {"metricTauFactor", "--metric-tau"},
-        {"optimizer", "--optimizer"},
-        {"initialStep", "--initial-step"},
-        {"metricTolerance", "--metric-tolerance"},
-        {"maxIterations", "--max-iterations"},
-        {"energyTolerance", "--energy-tolerance"},
-        {"settleTolerance", "--settle-tolerance"},
-        {"toleranceCoarsening", "--tolerance-coarsening"},
-        {"relativeGradientTolerance", "--gradient-tolerance"},
-    };
-    return keys;
-}
-
-/// Applies a --config file: a JSON object with the keys of report.json's "parameters", or a
-/// whole report.json (its "parameters" are used). Each key is applied as its option would be.
-/// @throw openvdb::IoError if the file cannot be read
-/// @throw openvdb::ValueError if it is not JSON, not an object, or has an unknown key or a value
-///        of the wrong type
+/// Applies a --config file (ConfigFile.h): each setting as its option would be.
+/// @throw as readConfig; UsageError for a value its option rejects
 void
 applyConfig(const std::string& path, MatchCliOptions& o)
 {
-    std::ifstream in(path, std::ios::binary);
-    std::error_code ec;
-    if (!in || std::filesystem::is_directory(path, ec)) {
-        OPENVDB_THROW(openvdb::IoError, "--config: cannot read '" << path << "'");
-    }
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const Json doc = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-    if (doc.is_discarded() || !doc.is_object()) {
-        OPENVDB_THROW(openvdb::ValueError, "--config: '"
-                                               << path
-                                               << "' is not a JSON object (a report.json or its "
-                                                  "\"parameters\")");
-    }
-    const Json& params = doc.contains("parameters") ? doc["parameters"] : doc;
-    if (!params.is_object()) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "--config: \"parameters\" in '" << path << "' is not an object");
-    }
     const std::vector<Option<MatchCliOptions>> table = matchOptionTable();
-    for (const auto& [key, value] : params.items()) {
-        // Written by match but fixed by the method (tab:parameters): must hold its value.
-        if (key == "sigmaFactor") {
-            if (!value.is_number() || value.get<double>() != EnergyParameters().sigmaFactor) {
-                OPENVDB_THROW(openvdb::ValueError, "--config: sigmaFactor is fixed at "
-                                                       << EnergyParameters().sigmaFactor
-                                                       << " (sigma = 2h)");
-            }
-            continue;
-        }
-        const char* option = nullptr;
-        for (const auto& [name, opt] : configKeys())
-            if (key == name) option = opt;
-        if (!option) {
-            std::string known;
-            for (const auto& kv : configKeys())
-                known += std::string(known.empty() ? "" : ", ") + kv.first;
-            OPENVDB_THROW(openvdb::ValueError, "--config: unknown key '" << key << "' in '" << path
-                                                                         << "' (known: " << known
-                                                                         << ")");
-        }
-        if (!value.is_number() && !value.is_string()) {
-            OPENVDB_THROW(openvdb::ValueError,
-                          "--config: '" << key << "' must be a number or a string");
-        }
-        const std::string valueText = value.is_string() ? value.get<std::string>() : value.dump();
+    for (const ConfigSetting& setting : readConfig(path)) {
         for (const Option<MatchCliOptions>& opt : table) {
-            if (canonicalName(opt.name) != option) continue;
+            if (canonicalName(opt.name) != setting.option) continue;
             try {
-                opt.apply(o, valueText);
+                opt.apply(o, setting.value);
             } catch (const UsageError& e) {
-                throw UsageError("--config '" + path + "', key '" + key + "': " + e.what());
+                throw UsageError("--config '" + path + "', key '" + setting.key + "': " + e.what());
             }
         }
     }
@@ -748,21 +672,20 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                                << o.deformationLevel);
     }
 
-    // The output directory must be usable before hours of work.
-    namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::create_directories(o.outDir, ec);
-    if (!fs::is_directory(o.outDir)) {
-        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
-                                            << o.outDir << "'"
-                                            << (ec ? ": " + ec.message() : std::string()));
-    }
-    // One match per output directory: a second run into it would interleave the outputs.
-    const OutputLock lock(o.outDir);
-
     const Surface<D>& source = surfaceOf<D>(in[0]);
     const Surface<D>& target = surfaceOf<D>(in[1]);
     const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
+    // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
+    // inputs) have voxels of 2^-level / scale: OpenVDB cannot represent them below its limit.
+    const double worldSpacing = placement.toWorldLength(std::ldexp(1.0, -opts.multiscale.maxLevel));
+    if (!(worldSpacing > MIN_WORLD_VOXEL_SIZE)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "the shapes are too small in world units: the finest spacing, "
+                          << worldSpacing << " at level " << opts.multiscale.maxLevel
+                          << ", is not above " << MIN_WORLD_VOXEL_SIZE
+                          << ", the smallest voxel OpenVDB's transforms represent; rescale the "
+                             "inputs (e.g. to millimetres) or lower --max-level");
+    }
 
     // --init: an earlier result of these inputs; the run starts after its finest level (or at
     // the last requested one), with cells no coarser than those of the requested first level.
@@ -778,6 +701,18 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         opts.validate(D);
         checkInterrupted();
     }
+
+    // The output directory must be usable before hours of work.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::create_directories(o.outDir, ec);
+    if (!fs::is_directory(o.outDir)) {
+        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
+                                            << o.outDir << "'"
+                                            << (ec ? ": " + ec.message() : std::string()));
+    }
+    // One match per output directory: a second run into it would interleave the outputs.
+    const OutputLock lock(o.outDir);
 
     ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +

@@ -103,6 +103,20 @@ checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
         OPENVDB_THROW(openvdb::ValueError, s.str());
     }
     const double h = grid.voxelSize()[0];
+    if (!(h > MIN_WORLD_VOXEL_SIZE)) {
+        std::ostringstream s;
+        s << context << " has the voxel size " << h << ", at or below " << MIN_WORLD_VOXEL_SIZE
+          << ", the smallest voxel OpenVDB's transforms represent (their determinant h^3 must "
+             "exceed 1e-15); rescale the input (e.g. to millimetres)";
+        OPENVDB_THROW(openvdb::ValueError, s.str());
+    }
+    if (!(h <= MAX_WORLD_VOXEL_SIZE)) {
+        std::ostringstream s;
+        s << context << " has the voxel size " << h << ", above " << MAX_WORLD_VOXEL_SIZE
+          << ": world coordinates and distances would overflow single precision; rescale the "
+             "input";
+        OPENVDB_THROW(openvdb::ValueError, s.str());
+    }
     const float background = grid.background();
     if (!std::isfinite(background) || !(background > 0.0f)) {
         std::ostringstream s;

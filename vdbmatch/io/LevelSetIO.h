@@ -27,6 +27,14 @@ namespace vdbmatch {
 /// Thread-safety: may be called concurrently for different files.
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
 
+/// Smallest world length OpenVDB represents as a voxel: a linear transform needs a determinant
+/// above 1e-15 (openvdb::math::ScaleMap: "Non-zero scale values required"), i.e. a uniform voxel
+/// above 1e-5. Input level sets, and every grid match writes in world units, need voxels above it.
+constexpr double MIN_WORLD_VOXEL_SIZE = 1e-5;
+/// Largest input voxel size: distances and displacements are stored in single precision in world
+/// units (largest float 3.4e38); 1e33 leaves room for shapes of 10^5 voxels across.
+constexpr double MAX_WORLD_VOXEL_SIZE = 1e33;
+
 /// Band half width (voxels) of the level sets made from densities by levelSetAtIsoValue().
 constexpr double ISO_LEVEL_SET_HALF_WIDTH = 3.0;
 
@@ -51,7 +59,8 @@ openvdb::FloatGrid::Ptr readLevelSetAtIsoValue(const std::string& path, const st
 /// Checks that @a grid can be used as the signed distance of a closed surface:
 /// - grid class GRID_LEVEL_SET (a fog volume, or a grid with every value in [0, 1], gets a
 ///   message that says to convert it with an iso value: readLevelSetAtIsoValue, --iso-value);
-/// - a linear transform with uniform voxel size (a similarity: no shear or non-uniform scale);
+/// - a linear transform with uniform voxel size (a similarity: no shear or non-uniform scale),
+///   in (MIN_WORLD_VOXEL_SIZE, MAX_WORLD_VOXEL_SIZE];
 /// - finite values everywhere (active, inactive, tiles, background) and a positive background;
 /// - no active tiles, at least one active voxel, and a zero crossing (active values of both
 ///   signs);
