@@ -52,6 +52,7 @@ check suggest-command 1 '' "unknown command 'energi' \(did you mean energy\?" --
 check suggest-command-2 1 '' "unknown command 'warp'" -- warp "$SPHERE" "$ELLIPSOID"
 check no-suggestion 1 '' "unknown option '--zzzzzzzz' \(see vdb_match --help\)" -- energy "$SPHERE" "$ELLIPSOID" --zzzzzzzz
 check option-of-other-command 1 '' "unknown option '--stride'" -- energy "$SPHERE" "$ELLIPSOID" --stride 2
+check flag-given-a-value 1 '' '--quiet takes no value' -- energy "$SPHERE" "$ELLIPSOID" --quiet=maybe
 check flag-value-missing 1 '' '--grid expects a value NAME' -- energy "$SPHERE" "$ELLIPSOID" --grid
 # As before CLI11: an option that needs a value takes the next argument, whatever it looks like.
 check value-looks-like-option 1 '' "--level expects an integer, got '--quiet'" -- energy "$SPHERE" "$ELLIPSOID" --level --quiet

@@ -295,6 +295,18 @@ parseCommandLine(const std::vector<BoundOption>& options, int argc, const char* 
             }
         }
         throw UsageError(what);
+    } catch (const CLI::ConversionError& e) {
+        // A flag given a value CLI11 cannot read as true/false ("--quiet=maybe").
+        const std::string what = e.what();
+        for (const BoundOption& b : options) {
+            if (b.metavar) continue;
+            for (const std::string& n : splitNames(b.names)) {
+                if (what.find(n + " ") != std::string::npos ||
+                    what.find(n + "=") != std::string::npos)
+                    throw UsageError(n + " takes no value");
+            }
+        }
+        throw UsageError(what);
     } catch (const CLI::ParseError& e) {
         throw UsageError(e.what());
     }
