@@ -7,7 +7,7 @@
 # usage: fuzz/run_fuzzers.sh [SECONDS_PER_TARGET] [TARGET...]
 #   SECONDS_PER_TARGET  default 600
 #   TARGET              default: all (FuzzLevelSetIO FuzzMeshObj FuzzMeshPly FuzzMeshStl
-#                       FuzzPolyline FuzzMeshDocument FuzzPointTable)
+#                       FuzzPolyline FuzzMeshDocument FuzzPointTable FuzzConfig)
 # environment:
 #   BUILD_DIR      the VDBMATCH_FUZZ build tree (default: <repo>/build-fuzz; configured with
 #                  clang if it has no CMakeCache.txt)
@@ -20,7 +20,7 @@
 set -u -o pipefail
 
 ALL_TARGETS=(FuzzLevelSetIO FuzzMeshObj FuzzMeshPly FuzzMeshStl FuzzPolyline FuzzMeshDocument
-             FuzzPointTable)
+             FuzzPointTable FuzzConfig)
 SECONDS_PER_TARGET=${1:-600}
 shift $(( $# > 0 ? 1 : 0 ))
 TARGETS=("$@")

@@ -5,7 +5,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake pkg-config
   libopenvdb-dev libtbb-dev libeigen3-dev libopenimageio-dev libboost-iostreams-dev
-  libgtest-dev libbenchmark-dev nlohmann-json3-dev
+  libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   libopenvdb-tools python3-openvdb python3-numpy openimageio-tools clang-format time
 )
 missing=()

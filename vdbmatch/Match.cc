@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <openvdb/Exceptions.h>
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -71,6 +72,17 @@ placed(const Surface<D>& world, const UnitBoxPlacement& placement, const char* w
         }
     }
     return unit;
+}
+
+/// @a x as an openvdb point (2D: z = 1/2, the plane of Omega's placement).
+template <int D>
+openvdb::Vec3d
+toPoint3(const Vec<D>& x)
+{
+    openvdb::Vec3d p(0.5);
+    for (int a = 0; a < D; ++a)
+        p[a] = x[a];
+    return p;
 }
 
 /// Extra distance to allow for the error of a coarse tier of a sampler at x.
@@ -186,6 +198,35 @@ lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
 }
 
 template <int D>
+Real
+minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
+{
+    const auto& cells = lattice.cells();
+    const auto& paths = KuhnSplit<D>::path();
+    const auto& axes = KuhnSplit<D>::axis();
+    return tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, cells.size()), INF,
+        [&](const tbb::blocked_range<std::size_t>& r, Real best) {
+            for (std::size_t ci = r.begin(); ci != r.end(); ++ci) {
+                const auto& cell = cells[ci];
+                const Real side = lattice.h() * Real(1 << cell.log2Size);
+                for (std::size_t p = 0; p < paths.size(); ++p) {
+                    Mat<D> A = Mat<D>::Identity();
+                    for (int m = 1; m <= D; ++m) {
+                        const int a = axes[p][m];
+                        const auto from = cell.corners[paths[p][m - 1]];
+                        const auto to = cell.corners[paths[p][m]];
+                        A.col(a) += (u.col(to) - u.col(from)) / side;
+                    }
+                    best = std::min(best, A.determinant());
+                }
+            }
+            return best;
+        },
+        [](Real a, Real b) { return std::min(a, b); });
+}
+
+template <int D>
 MatchResult<D>
 match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement& placement,
       const MatchOptions& optsIn, const MatchObserver& observer,
@@ -232,6 +273,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             const Real reach2 = sigma + opts.refinementMarginCells * h;
             std::unique_ptr<multiscale::PiecewiseLinearInterpolator<D>> previous;
             Real lipschitz = 1;
+            // The first level of a run from an earlier result: refine around its phi^{-1}(M2).
+            const InitialDisplacement* initial =
+                context.previousLattice ? nullptr : opts.initial.get();
+            if (initial) lipschitz = Real(initial->lipschitz);
             if (context.previousLattice) {
                 previous = std::make_unique<multiscale::PiecewiseLinearInterpolator<D>>(
                     *context.previousLattice);
@@ -259,6 +304,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 if (previous) {
                     Vec<D> du;
                     if (previous->evaluate(*uPrev, x, du)) y += du;
+                } else if (initial) {
+                    const openvdb::Vec3d du = initial->displacement(toPoint3<D>(x));
+                    for (int a = 0; a < D; ++a)
+                        y[a] += du[a];
                 }
                 return !d2.sampleDistance(y, d) || std::abs(d) < reach2;
             };
@@ -274,6 +323,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                     if (previous) {
                         Vec<D> du;
                         if (previous->evaluate(*uPrev, c, du)) y += du;
+                    } else if (initial) {
+                        const openvdb::Vec3d du = initial->displacement(toPoint3<D>(c));
+                        for (int a = 0; a < D; ++a)
+                            y[a] += du[a];
                     }
                     near = !d2.sampleDistance(y, d) ||
                            std::abs(d) < reach2 + lipschitz * radius + tierSlack(d2, y);
@@ -314,9 +367,37 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         if (observer.levelEnd) observer.levelEnd(result.levels.back());
     };
 
+    multiscale::InitialGuess<D> initialGuess;
+    if (opts.initial) {
+        initialGuess = [&](const SimplexLattice<D>& lattice) {
+            const InitialDisplacement& initial = *opts.initial;
+            NodeVectors<D> u = NodeVectors<D>::Zero(D, Eigen::Index(lattice.nodeCount()));
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lattice.nodeCount()),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                                      if (lattice.isBoundaryNode(i)) continue; // phi = Id
+                                      const openvdb::Vec3d du = initial.displacement(
+                                          toPoint3<D>(lattice.nodePosition(i)));
+                                      for (int a = 0; a < D; ++a)
+                                          u(a, Eigen::Index(i)) = du[a];
+                                  }
+                              });
+            lattice.expand(u);
+            const Real minDet = minDeterminant<D>(lattice, u);
+            if (!(minDet > 0) || !u.allFinite()) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              "match: " << initial.description
+                                        << " sampled at the nodes of the level " << lattice.level()
+                                        << " lattice folds (min det D phi = " << minDet
+                                        << " <= 0); start from a result whose finest level is "
+                                           "below the first level of this run");
+            }
+            return u;
+        };
+    }
     const multiscale::MultiscaleDriver<D> driver(opts.multiscale);
     multiscale::MultiscaleResult<D> run =
-        driver.run(builder, observer.iteration, levelEnd, opts.threaded, interrupter);
+        driver.run(builder, observer.iteration, levelEnd, opts.threaded, interrupter, initialGuess);
     if (result.levels.size() < run.reports.size()) {
         // Interrupted before a level started: no lattice was built for it.
         LevelSummary stopped;
@@ -365,6 +446,8 @@ template struct MatchResult<2>;
 template struct MatchResult<3>;
 template LatticeSummary summarize<2>(const SimplexLattice<2>&);
 template LatticeSummary summarize<3>(const SimplexLattice<3>&);
+template Real minDeterminant<2>(const SimplexLattice<2>&, const NodeVectors<2>&);
+template Real minDeterminant<3>(const SimplexLattice<3>&, const NodeVectors<3>&);
 template Real lipschitzBound<2>(const SimplexLattice<2>&, const NodeVectors<2>&);
 template Real lipschitzBound<3>(const SimplexLattice<3>&, const NodeVectors<3>&);
 template MatchResult<2> match<2>(const Surface<2>&, const Surface<2>&, const UnitBoxPlacement&,

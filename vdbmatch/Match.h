@@ -44,6 +44,7 @@
 
 #include <functional>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace vdbmatch {
@@ -86,6 +87,22 @@ maxMatchLevel(int dim)
     return dim == 2 ? MAX_MATCH_LEVEL_2D : MAX_MATCH_LEVEL_3D;
 }
 
+/// A start of the descent other than phi = Id: the displacement u = phi - Id of an earlier
+/// result (vdb_match match --init, io/InitialDeformation.h). match() samples it at the nodes of
+/// the first level's lattice (exact where that lattice nests in the pieces on which u is
+/// linear), sets the boundary nodes to 0 and the hanging nodes to their constraint values, and
+/// refines that level around phi^{-1}(M2) as it does for later levels.
+struct InitialDisplacement
+{
+    /// u(x) at x in Omega, Omega units (2D: z is 1/2 and ignored, the result's z is unused).
+    /// Called concurrently. Signature: openvdb::Vec3d(const openvdb::Vec3d& xUnit).
+    std::function<openvdb::Vec3d(const openvdb::Vec3d&)> displacement;
+    /// An upper bound of the spectral norm of D phi over Omega (>= 1).
+    double lipschitz = 1;
+    /// What it is, for messages ("--init 'out/deformation.vdb'").
+    std::string description = "the initial deformation";
+};
+
 struct MatchOptions
 {
     /// Levels, energy parameters and kind, metric and descent options (tab:parameters).
@@ -98,6 +115,8 @@ struct MatchOptions
     double refinementMarginCells = DEFAULT_REFINEMENT_MARGIN_CELLS;
     /// Coarsest cells: side h_{coarsestLevel}; <= 0 selects multiscale.minLevel.
     int coarsestLevel = 0;
+    /// Start of the first level (multiscale.minLevel) instead of phi = Id; null: the identity.
+    std::shared_ptr<const InitialDisplacement> initial;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -174,8 +193,9 @@ struct MatchObserver
 /// @param interrupter     checked between stages and in the descent; when it fires, the result
 ///                        holds the last accepted iterate of the level that was running
 ///                        (isInterrupted()), or no lattice if no level had started
-/// @throw openvdb::ValueError for invalid options or shapes (checkSurface) and if a placed
-///        shape leaves [0,1]^d
+/// @throw openvdb::ValueError for invalid options or shapes (checkSurface), if a placed
+///        shape leaves [0,1]^d, and if opts.initial sampled on the first lattice folds
+///        (det D phi <= 0 on a simplex)
 template <int D>
 MatchResult<D> match(const Surface<D>& source, const Surface<D>& target,
                      const UnitBoxPlacement& placement, const MatchOptions& opts,
@@ -184,6 +204,9 @@ MatchResult<D> match(const Surface<D>& source, const Surface<D>& target,
 
 /// Summary of a lattice (counts, and the dense lattice of the same level).
 template <int D> LatticeSummary summarize(const SimplexLattice<D>& lattice);
+
+/// min det D phi of phi = Id + u over the simplices of a lattice (+inf for no simplex).
+template <int D> Real minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u);
 
 /// The Lipschitz constant of phi = Id + u on a lattice: the largest spectral norm of D phi over
 /// the simplices (at least 1).

@@ -8,8 +8,10 @@
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/LevelSetSphere.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -425,4 +427,87 @@ TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
             }
         }
     }
+}
+
+namespace {
+
+/// A ball of density around (2, 2, 2), voxel 0.1: 1 inside, 0 outside, 0.5 at radius 1.5.
+openvdb::FloatGrid::Ptr
+densityBall(openvdb::GridClass gridClass)
+{
+    openvdb::FloatGrid::Ptr g = openvdb::FloatGrid::create(0.0f);
+    g->setTransform(openvdb::math::Transform::createLinearTransform(0.1));
+    auto acc = g->getAccessor();
+    for (int i = 0; i < 40; ++i) {
+        for (int j = 0; j < 40; ++j) {
+            for (int k = 0; k < 40; ++k) {
+                const double r = (openvdb::Vec3d(i, j, k) * 0.1 - openvdb::Vec3d(2.0)).length();
+                const double d = std::clamp(0.5 + (1.5 - r) / 0.4, 0.0, 1.0);
+                if (d > 0) acc.setValue(openvdb::Coord(i, j, k), float(d));
+            }
+        }
+    }
+    g->setGridClass(gridClass);
+    g->setName("density");
+    return g;
+}
+
+} // namespace
+
+TEST(LevelSetIO, DensityIsRefusedWithWhatToDo)
+{
+    openvdb::initialize();
+    for (openvdb::GridClass c : {openvdb::GRID_FOG_VOLUME, openvdb::GRID_UNKNOWN}) {
+        try {
+            checkInputLevelSet(*densityBall(c), "grid 'density'");
+            FAIL() << "expected an error";
+        } catch (const openvdb::ValueError& e) {
+            EXPECT_NE(std::string(e.what()).find("is not a level set"), std::string::npos);
+            EXPECT_NE(std::string(e.what()).find("--iso-value X"), std::string::npos) << e.what();
+        }
+    }
+    // A float grid with negative values is not taken for a density.
+    openvdb::FloatGrid::Ptr sdf =
+        openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1, {}, 0.1f);
+    sdf->setGridClass(openvdb::GRID_UNKNOWN);
+    try {
+        checkInputLevelSet(*sdf, "grid 'sdf'");
+        FAIL() << "expected an error";
+    } catch (const openvdb::ValueError& e) {
+        EXPECT_EQ(std::string(e.what()).find("--iso-value"), std::string::npos) << e.what();
+    }
+}
+
+TEST(LevelSetIO, DensityAtIsoValueIsTheLevelSetOfItsIsoSurface)
+{
+    openvdb::initialize();
+    const openvdb::FloatGrid::Ptr fog = densityBall(openvdb::GRID_FOG_VOLUME);
+    const openvdb::FloatGrid::Ptr ls = levelSetAtIsoValue(*fog, 0.5, "grid 'density'");
+    EXPECT_EQ(ls->getGridClass(), openvdb::GRID_LEVEL_SET);
+    EXPECT_EQ(ls->getName(), "density");
+    EXPECT_NO_THROW(checkInputLevelSet(*ls, "converted"));
+    auto acc = ls->getConstAccessor();
+    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler>
+        sampler(acc, ls->transform());
+    // Signed distance to the sphere of radius 1.5: negative inside, |error| below a voxel.
+    for (const openvdb::Vec3d& p :
+         {openvdb::Vec3d(3.5, 2, 2), openvdb::Vec3d(2, 0.5, 2), openvdb::Vec3d(2, 2, 3.5),
+          openvdb::Vec3d(3.2, 2, 2), openvdb::Vec3d(2, 2, 0.3)}) {
+        const double expected = (p - openvdb::Vec3d(2.0)).length() - 1.5;
+        EXPECT_NEAR(sampler.wsSample(p), expected, 0.1) << p;
+    }
+    // Another iso value gives another sphere: 0.25 at radius 1.6.
+    const openvdb::FloatGrid::Ptr wider = levelSetAtIsoValue(*fog, 0.25, "grid 'density'");
+    auto wacc = wider->getConstAccessor();
+    openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler>
+        widerSampler(wacc, wider->transform());
+    EXPECT_NEAR(widerSampler.wsSample(openvdb::Vec3d(3.6, 2, 2)), 0.0, 0.1);
+
+    EXPECT_THROW(levelSetAtIsoValue(*fog, 1.5, "x"), openvdb::ValueError);
+    EXPECT_THROW(levelSetAtIsoValue(*fog, std::nan(""), "x"), openvdb::ValueError);
+    // Level sets are only checked.
+    openvdb::FloatGrid::Ptr sphere =
+        openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(1, {}, 0.1f);
+    EXPECT_EQ(levelSetAtIsoValue(*sphere, 0.5, "x")->activeVoxelCount(),
+              sphere->activeVoxelCount());
 }

@@ -57,8 +57,8 @@ applyOptionTable()
     using O = ApplyCliOptions;
     // clang-format off
     return {
-        {"--output", "OUTPUT", "Output",
-         "the carried file, same format as INPUT (required; also -o). Written atomically: on "
+        {"--output,-o", "OUTPUT", "Output",
+         "the carried file, same format as INPUT (required). Written atomically: on "
          "any error no file is left",
          [](O& o, const std::string& v) { o.output = v; }},
         {"--inverse", nullptr, "Map",

@@ -6,6 +6,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include <CLI/CLI.hpp>
 #include <filesystem>
 #include <new>
 #include <ostream>
@@ -38,9 +39,11 @@ commands()
          "one-voxel-thick slice is a 2D shape), meshes (.obj, .ply, .stl), closed 2D polylines "
          "(.polyline, .txt)",
          &matchOptionHelp},
-        {"energy", "energy SOURCE.vdb TARGET.vdb",
-         "place both level sets in the unit box, resample them at --level and print the terms "
-         "of the matching energy of the identity deformation (phi = Id)",
+        {"energy", "energy SOURCE TARGET",
+         "read both shapes as match does (level sets, one-voxel-thick slices as 2D shapes, "
+         "meshes, polylines), place them in the unit box, build their distance fields at --level "
+         "as match does at that level, and print the terms of the matching energy of the "
+         "identity deformation (phi = Id) on the dense lattice of that level",
          &energyOptionHelp},
         {"consistency", "consistency PHI.vdb PSI.vdb --source M1 --target M2",
          "measure a pair of deformations of M1 -> M2 (PHI) and M2 -> M1 (PSI), as the paper's "
@@ -107,7 +110,7 @@ exitCodeHelp()
                        "inf, empty grid, non-uniform voxels, open surface, 2D/3D mismatch, "
                        "shapes that do not fit the domain, not a deformation grid, a slice "
                        "position outside the domain, parameter out of range (levels: finest 9 "
-                       "in 3D, 12 in 2D)");
+                       "in 3D, 12 in 2D), an --init result of other inputs or that folds");
     s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
     s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
                        "as interrupted");
@@ -156,6 +159,38 @@ commandHelpText(const std::string& name)
     return s;
 }
 
+namespace {
+
+std::string
+versionText()
+{
+    return std::string(PROGRAM) + " " + VDBMATCH_VERSION + " (OpenVDB " +
+           openvdb::getLibraryVersionString() + ")\n";
+}
+
+/// The command a word names, or an error for a word that is neither a command nor a file:
+/// a mistyped command, with the closest command name.
+/// @throw UsageError
+void
+rejectUnknownCommand(const std::string& word)
+{
+    if (word.empty() || word[0] == '-' || word.find_first_of("./\\") != std::string::npos) return;
+    std::error_code ec;
+    if (std::filesystem::exists(word, ec)) return; // a file without extension
+    std::vector<std::string> names;
+    std::string list;
+    for (const CommandInfo& c : commands()) {
+        names.push_back(c.name);
+        list += std::string(list.empty() ? "" : ", ") + c.name;
+    }
+    const std::string suggestion = closestSpelling(word, names);
+    throw UsageError("unknown command '" + word + "' (" +
+                     (suggestion.empty() ? std::string() : "did you mean " + suggestion + "? ") +
+                     "commands: " + list + "; vdb_match --help)");
+}
+
+} // namespace
+
 int
 run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 {
@@ -163,51 +198,57 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
         err << PROGRAM << ": error: " << oneLine(message) << std::endl;
         return code;
     };
+    std::string command = "match";
     try {
         if (argc < 2) throw UsageError("missing arguments (see vdb_match --help)");
-        const std::string command = argv[1];
-        if (command == "-h" || command == "--help" || command == "help") {
+        // The program's own options, up to the first argument that is not one of them: the
+        // command word, or (implicit match) a file or an option of match.
+        CLI::App top(PROGRAM);
+        top.set_help_flag();
+        bool help = false, version = false;
+        top.add_flag("-h,--help", help);
+        top.add_flag("--version", version);
+        top.prefix_command();
+        std::vector<std::string> args;
+        for (int i = argc - 1; i >= 1; --i)
+            args.emplace_back(argv[i]);
+        try {
+            top.parse(args);
+        } catch (const CLI::ParseError& e) {
+            throw UsageError(e.what());
+        }
+        const std::vector<std::string> rest = top.remaining();
+        if (help || (!rest.empty() && rest[0] == "help")) {
             out << helpText();
             return EXIT_OK;
         }
-        if (command == "--version") {
-            out << PROGRAM << " " << VDBMATCH_VERSION << " (OpenVDB "
-                << openvdb::getLibraryVersionString() << ")\n";
+        if (version) {
+            out << versionText();
             return EXIT_OK;
         }
-        const bool explicitCommand = findCommand(command) != nullptr;
-        if (!explicitCommand && !command.empty() && command[0] != '-' &&
-            command.find_first_of("./\\") == std::string::npos) {
-            // A word that is not a command and has no extension: a mistyped command, not a file.
-            std::error_code ec;
-            if (!std::filesystem::exists(command, ec)) {
-                std::string names;
-                for (const CommandInfo& c : commands())
-                    names += std::string(names.empty() ? "" : ", ") + c.name;
-                throw UsageError("unknown command '" + command + "' (commands: " + names +
-                                 "; vdb_match --help)");
-            }
+        if (rest.empty()) throw UsageError("missing arguments (see vdb_match --help)");
+        const int restStart = argc - int(rest.size());
+        const bool explicitCommand = findCommand(rest[0]) != nullptr;
+        if (explicitCommand) {
+            command = rest[0];
+        } else {
+            rejectUnknownCommand(rest[0]);
         }
-        const int first = explicitCommand ? 2 : 1;
-        for (int i = first; i < argc; ++i) {
-            const std::string arg = argv[i];
-            if (arg == "--") break;
-            if (arg == "-h" || arg == "--help") {
-                out << (explicitCommand ? commandHelpText(command) : helpText());
-                return EXIT_OK;
-            }
-            if (arg == "--version") {
-                out << PROGRAM << " " << VDBMATCH_VERSION << " (OpenVDB "
-                    << openvdb::getLibraryVersionString() << ")\n";
-                return EXIT_OK;
-            }
+        const int first = explicitCommand ? restStart + 1 : restStart;
+        try {
+            if (command == "energy") return runEnergyCommand(argc, argv, first, out, err);
+            if (command == "consistency") return runConsistencyCommand(argc, argv, first, out, err);
+            if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
+            if (command == "texture") return runTextureCommand(argc, argv, first, out, err);
+            if (command == "apply") return runApplyCommand(argc, argv, first, out, err);
+            return runMatchCommand(argc, argv, first, out, err);
+        } catch (const HelpRequested&) {
+            out << commandHelpText(command);
+            return EXIT_OK;
+        } catch (const VersionRequested&) {
+            out << versionText();
+            return EXIT_OK;
         }
-        if (command == "energy") return runEnergyCommand(argc, argv, first, out, err);
-        if (command == "consistency") return runConsistencyCommand(argc, argv, first, out, err);
-        if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
-        if (command == "texture") return runTextureCommand(argc, argv, 2, out, err);
-        if (command == "apply") return runApplyCommand(argc, argv, 2, out, err);
-        return runMatchCommand(argc, argv, first, out, err);
     } catch (const UsageError& e) {
         return fail(EXIT_USAGE, e.what());
     } catch (const Interrupted&) {

@@ -1,8 +1,9 @@
 /// @file Cli.h
-/// @brief The vdb_match command line: option table, parsing, help, and the subcommands.
+/// @brief The vdb_match command line: one option table per command (parsed with CLI11, which also
+///        renders its help page), dispatch, and the subcommands.
 ///
 /// Usage: `vdb_match [match] SOURCE TARGET -o OUTDIR [options]`,
-/// `vdb_match energy SOURCE.vdb TARGET.vdb [options]`,
+/// `vdb_match energy SOURCE TARGET [options]`,
 /// `vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]`,
 /// `vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]`,
 /// `vdb_match apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse] [options]`,
@@ -15,6 +16,7 @@
 #include <vdbmatch/geometry/UnitBox.h>
 
 #include <iosfwd>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -38,21 +40,28 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-/// Options of the `energy` command, with their defaults.
+/// Options of the `energy` command, with their defaults. Energy coefficients left unset take
+/// the defaults of the inputs' dimension (tab:parameters), as in `match`.
 struct EnergyOptions
 {
-    std::string source, target; ///< input files
+    std::string source, target; ///< input files (any shape `match` reads)
     std::string grid;           ///< --grid: grid name in both files
     std::string sourceGrid;     ///< --source-grid
     std::string targetGrid;     ///< --target-grid
     int level = 6;              ///< lattice level, h = 2^-level
     double margin = DEFAULT_UNIT_BOX_MARGIN;
+    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     EnergyKind kind = EnergyKind::Symmetric;
-    EnergyParameters params = EnergyParameters::defaults(3);
+    std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
+    double tau = EnergyParameters().tau;
     int hessianSmoothing = 0; ///< ShapeFieldOptions::hessianSmoothing
     int threads = 0;          ///< 0: all cores
     bool json = false;
     bool quiet = false;
+
+    /// The energy parameters for inputs of dimension @a dim: the options given over
+    /// EnergyParameters::defaults(dim).
+    EnergyParameters parameters(int dim) const;
 };
 
 /// Parses the arguments that follow `energy` (argv[first..argc)).

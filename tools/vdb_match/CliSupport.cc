@@ -1,6 +1,8 @@
 /// @file CliSupport.cc
 #include "CliSupport.h"
 
+#include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -99,6 +101,280 @@ wrapHelp(const std::string& left, const std::string& text)
         firstWord = false;
     }
     return out + "\n";
+}
+
+////////////////////////////////////////////////////////////////////////////////
+// Options (CLI11)
+
+namespace {
+
+/// The spellings of "--output,-o": {"--output", "-o"}.
+std::vector<std::string>
+splitNames(const std::string& names)
+{
+    std::vector<std::string> out;
+    std::string name;
+    std::istringstream in(names);
+    while (std::getline(in, name, ','))
+        if (!name.empty()) out.push_back(name);
+    return out;
+}
+
+/// CLI11 lists short names first ("-o,--output"); ours start with the canonical long name.
+std::string
+cli11Names(const std::string& names)
+{
+    std::vector<std::string> parts = splitNames(names);
+    std::stable_partition(parts.begin(), parts.end(),
+                          [](const std::string& n) { return n.size() == 2; });
+    std::string out;
+    for (const std::string& n : parts)
+        out += (out.empty() ? "" : ",") + n;
+    return out;
+}
+
+/// Levenshtein distance.
+std::size_t
+editDistance(const std::string& a, const std::string& b)
+{
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j)
+        row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t up = row[j];
+            row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+            diagonal = up;
+        }
+    }
+    return row[b.size()];
+}
+
+/// The help flags every command has, after its own options.
+constexpr const char* HELP_GROUP = "Other";
+
+/// The option lines of vdb_match: "  --name METAVAR" then the help text from column 26, wrapped
+/// at 100 columns; groups separated by a blank line, in table order.
+class HelpFormatter : public CLI::Formatter
+{
+public:
+    std::string make_group(std::string group, bool,
+                           std::vector<const CLI::Option*> opts) const override
+    {
+        std::string s = "\n" + group + ":\n";
+        for (const CLI::Option* opt : opts)
+            s += make_option(opt, false);
+        return s;
+    }
+    std::string make_option(const CLI::Option* opt, bool) const override
+    {
+        std::string left;
+        for (const std::string& n : opt->get_snames())
+            left += (left.empty() ? "-" : ", -") + n;
+        for (const std::string& n : opt->get_lnames())
+            left += (left.empty() ? "--" : ", --") + n;
+        if (!opt->get_type_name().empty()) left += " " + opt->get_type_name();
+        return wrapHelp(left, opt->get_description());
+    }
+    std::string make_help(const CLI::App* app, std::string, CLI::AppFormatMode) const override
+    {
+        std::string s;
+        for (const std::string& group : app->get_groups()) {
+            const std::vector<const CLI::Option*> opts =
+                app->get_options([&](const CLI::Option* o) {
+                    return o->get_group() == group && o->nonpositional();
+                });
+            if (!group.empty() && !opts.empty()) s += make_group(group, false, opts);
+        }
+        return s;
+    }
+};
+
+/// The CLI11 app of one command: every option of @a options (in order, grouped), then -h/--help
+/// and --version; positional arguments collected into @a positional; unknown options kept for
+/// the caller (allow_extras) so that it can suggest the closest spelling.
+void
+buildApp(CLI::App& app, const std::vector<BoundOption>& options,
+         std::vector<std::string>& positional)
+{
+    app.set_help_flag();
+    app.allow_extras();
+    app.formatter(std::make_shared<HelpFormatter>());
+    for (const BoundOption& b : options) {
+        CLI::Option* opt = nullptr;
+        auto apply = b.apply;
+        if (b.metavar) {
+            opt = app.add_option(
+                cli11Names(b.names),
+                [apply](const CLI::results_t& values) {
+                    for (const std::string& v : values)
+                        apply(v);
+                    return true;
+                },
+                b.help);
+            opt->type_name(b.metavar)->type_size(1)->expected(1);
+            opt->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+        } else {
+            opt = app.add_flag_callback(
+                cli11Names(b.names), [apply]() { apply(std::string()); }, b.help);
+            opt->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+        }
+        opt->group(b.group)->trigger_on_parse();
+    }
+    app.add_flag_callback(
+           "-h,--help", []() { throw HelpRequested{}; }, "print this help and exit")
+        ->group(HELP_GROUP)
+        ->trigger_on_parse();
+    app.add_flag_callback(
+           "--version", []() { throw VersionRequested{}; }, "print the version and exit")
+        ->group(HELP_GROUP)
+        ->trigger_on_parse();
+    app.add_option("arguments", positional, "positional arguments")->group("");
+}
+
+} // namespace
+
+std::string
+canonicalName(const char* name)
+{
+    const std::string n = name;
+    return n.substr(0, n.find(','));
+}
+
+std::string
+closestSpelling(const std::string& word, const std::vector<std::string>& candidates)
+{
+    std::string best;
+    std::size_t bestDistance = std::string::npos;
+    for (const std::string& c : candidates) {
+        const std::size_t d = editDistance(word, c);
+        if (d < bestDistance) {
+            bestDistance = d;
+            best = c;
+        }
+    }
+    // A typo: a few edits, fewer than a third of the word (so '--x' does not suggest '--q').
+    const std::size_t limit = std::max<std::size_t>(1, std::min<std::size_t>(3, word.size() / 3));
+    return bestDistance <= limit ? best : std::string();
+}
+
+std::vector<std::string>
+parseCommandLine(const std::vector<BoundOption>& options, int argc, const char* const* argv,
+                 int first)
+{
+    CLI::App app;
+    std::vector<std::string> positional;
+    buildApp(app, options, positional);
+    std::vector<std::string> args;
+    for (int i = argc - 1; i >= first; --i)
+        args.emplace_back(argv[i]); // CLI11 takes them reversed
+    try {
+        app.parse(args);
+    } catch (const CLI::ArgumentMismatch& e) {
+        // "--level: 1 required L missing", "Expected exactly 1 arguments to --level, got 0":
+        // the option is one of the words.
+        const std::string what = e.what();
+        std::vector<std::string> words;
+        std::string word;
+        for (const char c : what + " ") {
+            if (c == ' ' || c == ':' || c == ',') {
+                if (!word.empty()) words.push_back(word);
+                word.clear();
+            } else {
+                word += c;
+            }
+        }
+        for (const BoundOption& b : options) {
+            for (const std::string& n : splitNames(b.names)) {
+                if (b.metavar && std::find(words.begin(), words.end(), n) != words.end()) {
+                    throw UsageError(canonicalName(b.names.c_str()) + " expects a value " +
+                                     b.metavar);
+                }
+            }
+        }
+        throw UsageError(what);
+    } catch (const CLI::ConversionError& e) {
+        // A flag given a value CLI11 cannot read as true/false ("--quiet=maybe").
+        const std::string what = e.what();
+        for (const BoundOption& b : options) {
+            if (b.metavar) continue;
+            for (const std::string& n : splitNames(b.names)) {
+                if (what.find(n + " ") != std::string::npos ||
+                    what.find(n + "=") != std::string::npos)
+                    throw UsageError(n + " takes no value");
+            }
+        }
+        throw UsageError(what);
+    } catch (const CLI::ParseError& e) {
+        throw UsageError(e.what());
+    }
+    const std::vector<std::string> extras = app.remaining();
+    for (const std::string& extra : extras) {
+        if (extra.size() < 2 || extra[0] != '-' || extra == "--") continue;
+        const std::string name = extra.substr(0, extra.find('='));
+        std::vector<std::string> spellings = {"--help", "--version"};
+        for (const BoundOption& b : options) {
+            const std::vector<std::string> names = splitNames(b.names);
+            spellings.insert(spellings.end(), names.begin(), names.end());
+            // A known flag given a value ("--quiet=1") lands here too.
+            if (b.metavar == nullptr && std::find(names.begin(), names.end(), name) != names.end())
+                throw UsageError(name + " takes no value");
+        }
+        const std::string suggestion = closestSpelling(name, spellings);
+        throw UsageError("unknown option '" + name + "'" +
+                         (suggestion.empty() ? std::string(" (see vdb_match --help)")
+                                             : " (did you mean " + suggestion + "?)"));
+    }
+    // Arguments CLI11 could not place (none expected: every non-option is positional).
+    for (const std::string& extra : extras)
+        if (extra != "--") positional.push_back(extra);
+    return positional;
+}
+
+void
+assignInputs(const std::vector<std::string>& positional, std::string& source, std::string& target,
+             const std::string& what)
+{
+    const std::size_t needed = std::size_t(source.empty()) + std::size_t(target.empty());
+    if (positional.size() != needed) {
+        throw UsageError(what + ", got " + std::to_string(positional.size()) + " file argument(s)" +
+                         (needed < 2 ? " besides --source/--target" : std::string()) +
+                         " (see vdb_match --help)");
+    }
+    std::size_t next = 0;
+    if (source.empty()) source = positional[next++];
+    if (target.empty()) target = positional[next++];
+}
+
+Shape
+readInputShape(const std::string& path, const std::string& gridName, std::optional<double> isoValue)
+{
+    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
+        throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
+    }
+    if (!isLevelSetFile(path)) isoValue.reset(); // meshes and polylines are surfaces already
+    return readShape(path, gridName, isoValue);
+}
+
+void
+checkIsoValueInputs(const std::optional<double>& isoValue, const std::string& source,
+                    const std::string& target)
+{
+    if (isoValue && !isLevelSetFile(source) && !isLevelSetFile(target)) {
+        throw UsageError("--iso-value applies to .vdb densities (fog volumes), and neither input "
+                         "is a .vdb file");
+    }
+}
+
+std::string
+renderOptionHelp(const std::vector<BoundOption>& options)
+{
+    CLI::App app;
+    std::vector<std::string> positional;
+    buildApp(app, options, positional);
+    return app.help();
 }
 
 namespace {

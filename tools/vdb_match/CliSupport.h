@@ -1,9 +1,11 @@
 /// @file CliSupport.h
-/// @brief What the vdb_match commands share: the option table and its parser, number parsing,
+/// @brief What the vdb_match commands share: the option table and its CLI11 parser, number parsing,
 ///        help layout, SIGINT/SIGTERM handling, JSON and text formatting.
 #pragma once
 
 #include "Cli.h"
+
+#include <vdbmatch/io/ShapeIO.h>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/util/NullInterrupter.h>
@@ -12,6 +14,7 @@
 #include <chrono>
 #include <functional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -24,7 +27,9 @@ extern const char* const PROGRAM;
 // Options
 
 /// One option of a command: `--name VALUE` (or `--name=VALUE`), or a flag when metavar is null.
-/// @a apply stores the value into the command's options (Signature: void(T&, const string&)).
+/// @a name is the option's spelling, or several separated by commas, the first the canonical one
+/// and the others aliases ("--output,-o"). @a apply stores the value into the command's options
+/// (Signature: void(T&, const string&)); it is called once per occurrence, in command-line order.
 template <typename T> struct Option
 {
     const char* name;
@@ -34,50 +39,95 @@ template <typename T> struct Option
     std::function<void(T&, const std::string&)> apply;
 };
 
-/// Applies the options of argv[first..argc) to @a o and returns the positional arguments.
-/// `--` ends the options; `-o` is short for `--output` (in tables that have it).
-/// @throw UsageError on an unknown option or a missing or unexpected value
+/// The canonical spelling of an option: its name up to the first comma.
+std::string canonicalName(const char* name);
+
+/// An option of a table bound to one options object: what the CLI11 layer sees.
+struct BoundOption
+{
+    std::string names; ///< "--output,-o": canonical first, then aliases
+    const char* metavar;
+    std::string group;
+    std::string help;
+    std::function<void(const std::string&)> apply;
+};
+
+/// Thrown by the parser on -h/--help (the caller prints the command's help page, exit 0).
+struct HelpRequested
+{
+};
+/// Thrown by the parser on --version (the caller prints the version, exit 0).
+struct VersionRequested
+{
+};
+
+/// Parses argv[first..argc) with CLI11 against @a options and returns the positional arguments.
+/// Options apply in command-line order; a repeated option applies each time (the last wins);
+/// `--` ends the options; -h/--help and --version throw HelpRequested / VersionRequested.
+/// @throw UsageError on an unknown option (with the closest valid spelling), a missing value or
+///        a value given to a flag
+std::vector<std::string> parseCommandLine(const std::vector<BoundOption>& options, int argc,
+                                          const char* const* argv, int first);
+
+/// The grouped option lines of @a options, rendered by CLI11's help formatter (our layout: names
+/// and metavar, then the help text wrapped at 100 columns), then -h/--help and --version.
+std::string renderOptionHelp(const std::vector<BoundOption>& options);
+
+/// The valid spelling in @a candidates closest to @a word (edit distance), or "" if none is
+/// close enough to be a likely typo.
+std::string closestSpelling(const std::string& word, const std::vector<std::string>& candidates);
+
+/// The table bound to @a o.
+template <typename T>
+std::vector<BoundOption>
+bindOptions(const std::vector<Option<T>>& table, T& o)
+{
+    std::vector<BoundOption> bound;
+    bound.reserve(table.size());
+    for (const Option<T>& opt : table) {
+        auto apply = opt.apply;
+        bound.push_back({opt.name, opt.metavar, opt.group, opt.help,
+                         [apply, &o](const std::string& v) { apply(o, v); }});
+    }
+    return bound;
+}
+
+/// Applies the options of argv[first..argc) to @a o and returns the positional arguments
+/// (see parseCommandLine).
 template <typename T>
 std::vector<std::string>
 parseOptions(const std::vector<Option<T>>& table, int argc, const char* const* argv, int first,
              T& o)
 {
-    std::vector<std::string> positional;
-    bool optionsDone = false;
-    for (int i = first; i < argc; ++i) {
-        const std::string arg = argv[i];
-        if (optionsDone || arg.size() < 2 || arg[0] != '-') {
-            positional.push_back(arg);
-            continue;
-        }
-        if (arg == "--") {
-            optionsDone = true;
-            continue;
-        }
-        const size_t eq = arg.find('=');
-        const std::string name = arg == "-o" ? std::string("--output") : arg.substr(0, eq);
-        const Option<T>* opt = nullptr;
-        for (const Option<T>& candidate : table) {
-            if (name == candidate.name) opt = &candidate;
-        }
-        if (!opt) throw UsageError("unknown option '" + name + "' (see vdb_match --help)");
-        std::string value;
-        if (!opt->metavar) {
-            if (eq != std::string::npos) throw UsageError(name + " takes no value");
-        } else if (eq != std::string::npos) {
-            value = arg.substr(eq + 1);
-        } else if (i + 1 < argc) {
-            value = argv[++i];
-        } else {
-            throw UsageError(name + " expects a value " + opt->metavar);
-        }
-        opt->apply(o, value);
-    }
-    return positional;
+    return parseCommandLine(bindOptions(table, o), argc, argv, first);
 }
 
-/// The help lines of an option table, grouped.
-template <typename T> std::string optionHelp(const std::vector<Option<T>>& table);
+/// The help lines of an option table, grouped (see renderOptionHelp).
+template <typename T>
+std::string
+optionHelp(const std::vector<Option<T>>& table)
+{
+    T unused;
+    return renderOptionHelp(bindOptions(table, unused));
+}
+
+/// Fills @a source and @a target, those not given as --source/--target, from @a positional in
+/// order. @throw UsageError "WHAT, got N file argument(s)" unless the counts agree
+void assignInputs(const std::vector<std::string>& positional, std::string& source,
+                  std::string& target, const std::string& what);
+
+/// Reads one input shape exactly as `match` does (readShape: .vdb level sets and one-layer 2D
+/// slices, .obj/.ply/.stl meshes, .polyline/.txt curves); used by `match` and `energy`.
+/// @throw UsageError if @a gridName is given for a file that is not a .vdb
+/// @throw as readShape
+/// @a isoValue (--iso-value) converts a .vdb density to the level set of that iso-surface.
+Shape readInputShape(const std::string& path, const std::string& gridName,
+                     std::optional<double> isoValue = std::nullopt);
+
+/// Checks --iso-value against the inputs: it needs a .vdb among them.
+/// @throw UsageError otherwise
+void checkIsoValueInputs(const std::optional<double>& isoValue, const std::string& source,
+                         const std::string& target);
 
 /// The command line as typed: argv joined by spaces.
 std::string commandLine(int argc, const char* const* argv);
@@ -95,22 +145,6 @@ int parseThreads(const std::string& text);
 std::string formatNumber(double x);
 /// One help entry: the left column, then @a text wrapped at 100 columns.
 std::string wrapHelp(const std::string& left, const std::string& text);
-
-template <typename T>
-std::string
-optionHelp(const std::vector<Option<T>>& table)
-{
-    std::string s, group;
-    for (const Option<T>& opt : table) {
-        if (group != opt.group) {
-            group = opt.group;
-            s += "\n" + group + ":\n";
-        }
-        s += wrapHelp(std::string(opt.name) + (opt.metavar ? " " + std::string(opt.metavar) : ""),
-                      opt.help);
-    }
-    return s;
-}
 
 ////////////////////////////////////////////////////////////////////////////////
 // Interruption

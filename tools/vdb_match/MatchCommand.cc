@@ -4,6 +4,7 @@
 ///        (docs/cli.md).
 #include "Cli.h"
 #include "CliSupport.h"
+#include "ConfigFile.h"
 
 #include <vdbmatch/Match.h>
 #include <vdbmatch/eval/Consistency.h>
@@ -13,6 +14,7 @@
 #include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
+#include <vdbmatch/io/InitialDeformation.h>
 #include <vdbmatch/io/InverseGrid.h>
 #include <vdbmatch/io/JacobianGrid.h>
 #include <vdbmatch/io/LevelSetIO.h>
@@ -68,11 +70,13 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
-    std::string config;        ///< --config FILE (applied before the other options)
-    bool writeInverse = true;  ///< inverse.vdb
-    bool writeJacobian = true; ///< jacobian.vdb
-    bool logJacobian = false;  ///< jacobian.vdb holds log det
-    bool half = false;         ///< half-float storage of the vector grids
+    std::string config;             ///< --config FILE (applied before the other options)
+    std::string init;               ///< --init DEFORMATION.vdb: start from an earlier result
+    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
+    bool writeInverse = true;       ///< inverse.vdb
+    bool writeJacobian = true;      ///< jacobian.vdb
+    bool logJacobian = false;       ///< jacobian.vdb holds log det
+    bool half = false;              ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;
@@ -91,9 +95,15 @@ matchOptionTable()
     using O = MatchCliOptions;
     // clang-format off
     return {
-        {"--output", "OUTDIR", "Input and output",
-         "output directory, created if missing; existing outputs are replaced (required; also -o)",
+        {"--output,-o", "OUTDIR", "Input and output",
+         "output directory, created if missing; existing outputs are replaced (required)",
          [](O& o, const std::string& v) { o.outDir = v; }},
+        {"--source", "FILE", "Input and output",
+         "the source shape M1, instead of the first positional argument",
+         [](O& o, const std::string& v) { o.source = v; }},
+        {"--target", "FILE", "Input and output",
+         "the target shape M2, instead of the second positional argument",
+         [](O& o, const std::string& v) { o.target = v; }},
         {"--grid", "NAME", "Input and output",
          "grid to read from .vdb inputs (default: the only float grid of each file)",
          [](O& o, const std::string& v) { o.grid = v; }},
@@ -101,6 +111,10 @@ matchOptionTable()
          [](O& o, const std::string& v) { o.sourceGrid = v; }},
         {"--target-grid", "NAME", "Input and output", "grid to read from TARGET (not with --grid)",
          [](O& o, const std::string& v) { o.targetGrid = v; }},
+        {"--iso-value", "X", "Input and output",
+         "read .vdb fog volumes (densities) as the level set of their iso-surface at density X, "
+         "inside where the density exceeds X (default: densities are refused)",
+         [](O& o, const std::string& v) { o.isoValue = parseDouble("--iso-value", v); }},
         {"--deformation-level", "L", "Input and output",
          "node spacing 2^-L of deformation.vdb in the unit box (default: the finest level, "
          "which reproduces phi exactly)",
@@ -109,6 +123,11 @@ matchOptionTable()
          "parameters from a JSON file: a report.json (its \"parameters\") or an object with those "
          "keys; options on the command line override it",
          [](O& o, const std::string& v) { o.config = v; }},
+        {"--init", "DEFORMATION.vdb", "Input and output",
+         "start from an earlier result of the same SOURCE and TARGET (its deformation.vdb): the "
+         "run starts at the first level finer than that result's finest (the same level if it "
+         "was interrupted; the last requested level if it is already as fine)",
+         [](O& o, const std::string& v) { o.init = v; }},
         {"--no-inverse", nullptr, "Input and output",
          "do not write inverse.vdb (the exact inverse phi^-1 at every node)",
          [](O& o, const std::string&) { o.writeInverse = false; }},
@@ -241,96 +260,19 @@ matchOptionTable()
     // clang-format on
 }
 
-/// The keys of report.json's "parameters" that --config accepts, with the option each sets.
-const std::vector<std::pair<const char*, const char*>>&
-configKeys()
-{
-    static const std::vector<std::pair<const char*, const char*>> keys = {
-        {"energy", "--energy"},
-        {"cMatch", "--c-match"},
-        {"cMem", "--c-mem"},
-        {"cBend", "--c-bend"},
-        {"cVol", "--c-vol"},
-        {"q", "--q"},
-        {"theta", "--theta"},
-        {"tau", "--tau"},
-        {"hessianSmoothing", "--hessian-smoothing"},
-        {"minLevel", "--min-level"},
-        {"maxLevel", "--max-level"},
-        {"margin", "--margin"},
-        {"refinementMarginCells", "--refine-margin"},
-        {"metricTauFactor", "--metric-tau"},
-        {"optimizer", "--optimizer"},
-        {"initialStep", "--initial-step"},
-        {"metricTolerance", "--metric-tolerance"},
-        {"maxIterations", "--max-iterations"},
-        {"energyTolerance", "--energy-tolerance"},
-        {"settleTolerance", "--settle-tolerance"},
-        {"toleranceCoarsening", "--tolerance-coarsening"},
-        {"relativeGradientTolerance", "--gradient-tolerance"},
-    };
-    return keys;
-}
-
-/// Applies a --config file: a JSON object with the keys of report.json's "parameters", or a
-/// whole report.json (its "parameters" are used). Each key is applied as its option would be.
-/// @throw openvdb::IoError if the file cannot be read
-/// @throw openvdb::ValueError if it is not JSON, not an object, or has an unknown key or a value
-///        of the wrong type
+/// Applies a --config file (ConfigFile.h): each setting as its option would be.
+/// @throw as readConfig; UsageError for a value its option rejects
 void
 applyConfig(const std::string& path, MatchCliOptions& o)
 {
-    std::ifstream in(path, std::ios::binary);
-    std::error_code ec;
-    if (!in || std::filesystem::is_directory(path, ec)) {
-        OPENVDB_THROW(openvdb::IoError, "--config: cannot read '" << path << "'");
-    }
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    const Json doc = Json::parse(text, nullptr, /*allow_exceptions=*/false);
-    if (doc.is_discarded() || !doc.is_object()) {
-        OPENVDB_THROW(openvdb::ValueError, "--config: '"
-                                               << path
-                                               << "' is not a JSON object (a report.json or its "
-                                                  "\"parameters\")");
-    }
-    const Json& params = doc.contains("parameters") ? doc["parameters"] : doc;
-    if (!params.is_object()) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "--config: \"parameters\" in '" << path << "' is not an object");
-    }
     const std::vector<Option<MatchCliOptions>> table = matchOptionTable();
-    for (const auto& [key, value] : params.items()) {
-        // Written by match but fixed by the method (tab:parameters): must hold its value.
-        if (key == "sigmaFactor") {
-            if (!value.is_number() || value.get<double>() != EnergyParameters().sigmaFactor) {
-                OPENVDB_THROW(openvdb::ValueError, "--config: sigmaFactor is fixed at "
-                                                       << EnergyParameters().sigmaFactor
-                                                       << " (sigma = 2h)");
-            }
-            continue;
-        }
-        const char* option = nullptr;
-        for (const auto& [name, opt] : configKeys())
-            if (key == name) option = opt;
-        if (!option) {
-            std::string known;
-            for (const auto& kv : configKeys())
-                known += std::string(known.empty() ? "" : ", ") + kv.first;
-            OPENVDB_THROW(openvdb::ValueError, "--config: unknown key '" << key << "' in '" << path
-                                                                         << "' (known: " << known
-                                                                         << ")");
-        }
-        if (!value.is_number() && !value.is_string()) {
-            OPENVDB_THROW(openvdb::ValueError,
-                          "--config: '" << key << "' must be a number or a string");
-        }
-        const std::string valueText = value.is_string() ? value.get<std::string>() : value.dump();
+    for (const ConfigSetting& setting : readConfig(path)) {
         for (const Option<MatchCliOptions>& opt : table) {
-            if (std::string(opt.name) != option) continue;
+            if (canonicalName(opt.name) != setting.option) continue;
             try {
-                opt.apply(o, valueText);
+                opt.apply(o, setting.value);
             } catch (const UsageError& e) {
-                throw UsageError("--config '" + path + "', key '" + key + "': " + e.what());
+                throw UsageError("--config '" + path + "', key '" + setting.key + "': " + e.what());
             }
         }
     }
@@ -351,12 +293,7 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (!o.config.empty()) applyConfig(o.config, o);
     const std::vector<std::string> positional =
         parseOptions(matchOptionTable(), argc, argv, first, o);
-    if (positional.size() != 2) {
-        throw UsageError("expected SOURCE TARGET, got " + std::to_string(positional.size()) +
-                         " file argument(s) (see vdb_match --help)");
-    }
-    o.source = positional[0];
-    o.target = positional[1];
+    assignInputs(positional, o.source, o.target, "expected SOURCE TARGET");
     if (o.outDir.empty()) throw UsageError("missing the output directory: -o OUTDIR");
     if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
         throw UsageError("--grid cannot be combined with --source-grid or --target-grid");
@@ -372,24 +309,12 @@ parseMatchOptions(int argc, const char* const* argv, int first)
             throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
         }
     }
+    checkIsoValueInputs(o.isoValue, o.source, o.target);
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
     return o;
-}
-
-////////////////////////////////////////////////////////////////////////////////
-// Inputs
-
-/// Reads one input; --grid for a non-.vdb file is a usage error.
-Shape
-readInput(const std::string& path, const std::string& gridName)
-{
-    if (!gridName.empty() && isShapeFile(path) && !isLevelSetFile(path)) {
-        throw UsageError("--grid applies to .vdb inputs, not to '" + path + "'");
-    }
-    return readShape(path, gridName);
 }
 
 ////////////////////////////////////////////////////////////////////////////////
@@ -525,11 +450,13 @@ template <int D>
 Json
 inputJson(const Shape& in)
 {
-    return Json{{"path", in.path},
-                {"format", in.format},
-                {"grid", in.grid},
-                {"vertices", surfaceOf<D>(in).points.size()},
-                {"elements", surfaceOf<D>(in).elements.size()}};
+    Json j{{"path", in.path},
+           {"format", in.format},
+           {"grid", in.grid},
+           {"vertices", surfaceOf<D>(in).points.size()},
+           {"elements", surfaceOf<D>(in).elements.size()}};
+    if (in.isoValue) j["isoValue"] = *in.isoValue;
+    return j;
 }
 
 /// An exclusive advisory lock (flock) on OUTDIR/.vdb_match.lock while a match writes there;
@@ -591,7 +518,7 @@ template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
            const MatchResult<D>& r, const std::string& status, double writeSeconds,
-           const ExtraOutputs& extra)
+           const ExtraOutputs& extra, const InitialDeformation* init)
 {
     const EnergyParameters& p = opts.multiscale.energy;
     const solver::DescentOptions& descent = opts.multiscale.descent;
@@ -606,23 +533,35 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
                           {"scale", r.placement.scale},
                           {"margin", r.placement.margin}};
+    if (init) {
+        j["init"] = Json{
+            {"path", o.init},
+            {"levels", std::to_string(init->firstLevel) + ".." + std::to_string(init->finestLevel)},
+            {"gridLevel", init->gridLevel},
+            {"interrupted", init->interrupted},
+            {"startLevel", opts.multiscale.minLevel},
+            {"lipschitz", init->start->lipschitz}};
+    } else {
+        j["init"] = nullptr;
+    }
     Json& params = j["parameters"];
     params["energy"] = toString(opts.multiscale.kind);
     params.update(energyParametersJson(p));
-    params.update(Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
-                       {"minLevel", opts.multiscale.minLevel},
-                       {"maxLevel", opts.multiscale.maxLevel},
-                       {"margin", opts.margin},
-                       {"refinementMarginCells", opts.refinementMarginCells},
-                       {"metricTauFactor", opts.multiscale.metricTauFactor},
-                       {"optimizer", solver::toString(descent.method)},
-                       {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
-                       {"metricTolerance", opts.multiscale.metric.cgTolerance},
-                       {"maxIterations", descent.maxIterations},
-                       {"energyTolerance", descent.energyTolerance},
-                       {"settleTolerance", descent.settleTolerance},
-                       {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
-                       {"relativeGradientTolerance", descent.relativeGradientTolerance}});
+    params.update(
+        Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
+             {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
+             {"maxLevel", opts.multiscale.maxLevel},
+             {"margin", opts.margin},
+             {"refinementMarginCells", opts.refinementMarginCells},
+             {"metricTauFactor", opts.multiscale.metricTauFactor},
+             {"optimizer", solver::toString(descent.method)},
+             {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
+             {"metricTolerance", opts.multiscale.metric.cgTolerance},
+             {"maxIterations", descent.maxIterations},
+             {"energyTolerance", descent.energyTolerance},
+             {"settleTolerance", descent.settleTolerance},
+             {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
+             {"relativeGradientTolerance", descent.relativeGradientTolerance}});
     Json levels = Json::array();
     for (const LevelSummary& l : r.levels) {
         const solver::Report& rep = l.report;
@@ -733,6 +672,36 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                                << o.deformationLevel);
     }
 
+    const Surface<D>& source = surfaceOf<D>(in[0]);
+    const Surface<D>& target = surfaceOf<D>(in[1]);
+    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
+    // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
+    // inputs) have voxels of 2^-level / scale: OpenVDB cannot represent them below its limit.
+    const double worldSpacing = placement.toWorldLength(std::ldexp(1.0, -opts.multiscale.maxLevel));
+    if (!(worldSpacing > MIN_WORLD_VOXEL_SIZE)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "the shapes are too small in world units: the finest spacing, "
+                          << worldSpacing << " at level " << opts.multiscale.maxLevel
+                          << ", is not above " << MIN_WORLD_VOXEL_SIZE
+                          << ", the smallest voxel OpenVDB's transforms represent; rescale the "
+                             "inputs (e.g. to millimetres) or lower --max-level");
+    }
+
+    // --init: an earlier result of these inputs; the run starts after its finest level (or at
+    // the last requested one), with cells no coarser than those of the requested first level.
+    std::optional<InitialDeformation> init;
+    if (!o.init.empty()) {
+        if (!o.quiet) err << PROGRAM << ": reading " << o.init << std::endl;
+        init = readInitialDeformation(o.init, placement, D);
+        const int firstRequested = opts.multiscale.minLevel;
+        opts.coarsestLevel = firstRequested;
+        opts.multiscale.minLevel =
+            std::max(firstRequested, std::min(init->nextLevel(), opts.multiscale.maxLevel));
+        opts.initial = init->start;
+        opts.validate(D);
+        checkInterrupted();
+    }
+
     // The output directory must be usable before hours of work.
     namespace fs = std::filesystem;
     std::error_code ec;
@@ -745,15 +714,16 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 
-    const Surface<D>& source = surfaceOf<D>(in[0]);
-    const Surface<D>& target = surfaceOf<D>(in[1]);
-    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
-
     ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
                      "D, " + toString(opts.multiscale.kind) + " energy, levels " +
                      std::to_string(opts.multiscale.minLevel) + ".." +
-                     std::to_string(opts.multiscale.maxLevel) + ")");
+                     std::to_string(opts.multiscale.maxLevel) +
+                     (init ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) +
+                                 ".." + std::to_string(init->finestLevel) +
+                                 (init->interrupted ? ", interrupted" : "") + ")"
+                           : std::string()) +
+                     ")");
     MatchObserver observer;
     observer.levelStart = [&](const LevelSummary& s) {
         progress.levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
@@ -780,8 +750,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformation->insertMeta("vdbmatch_energy",
                             openvdb::StringMetadata(toString(opts.multiscale.kind)));
     deformation->insertMeta(
-        "vdbmatch_levels", openvdb::StringMetadata(std::to_string(opts.multiscale.minLevel) + ".." +
-                                                   std::to_string(result.lattice->level())));
+        "vdbmatch_levels",
+        openvdb::StringMetadata(
+            std::to_string(opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel) +
+            ".." + std::to_string(result.lattice->level())));
+    if (init) deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
@@ -910,7 +883,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                : converged ? "converged"
                                            : "not converged";
     const double writeSeconds = secondsSince(writeStart);
-    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds, extra);
+    const std::string report =
+        reportJson<D>(o, opts, in, result, status, writeSeconds, extra, init ? &*init : nullptr);
     writeFileAtomically((fs::path(dir) / "report.json").string(),
                         [&](std::ostream& os) { os << report; });
 
@@ -953,10 +927,10 @@ runMatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
     };
     Shape in[2];
     say("reading " + o.source);
-    in[0] = readInput(o.source, o.grid.empty() ? o.sourceGrid : o.grid);
+    in[0] = readInputShape(o.source, o.grid.empty() ? o.sourceGrid : o.grid, o.isoValue);
     checkInterrupted();
     say("reading " + o.target);
-    in[1] = readInput(o.target, o.grid.empty() ? o.targetGrid : o.grid);
+    in[1] = readInputShape(o.target, o.grid.empty() ? o.targetGrid : o.grid, o.isoValue);
     checkInterrupted();
     if (in[0].dim != in[1].dim) {
         OPENVDB_THROW(openvdb::ValueError, "'" << o.source << "' is a " << in[0].dim

@@ -46,8 +46,8 @@ sliceOptionTable()
     using O = SliceCliOptions;
     // clang-format off
     return {
-        {"--output", "OUT.exr", "Input and output",
-         "the EXR file to write (required; also -o); the previews go to OUT.<channel>.png",
+        {"--output,-o", "OUT.exr", "Input and output",
+         "the EXR file to write (required); the previews go to OUT.<channel>.png",
          [](O& o, const std::string& v) { o.output = v; }},
         {"--source", "M1", "Input and output", "the source shape of PHI (required)",
          [](O& o, const std::string& v) { o.source = v; }},

@@ -71,7 +71,7 @@ textureOptionTable()
          [](O& o, const std::string& v) { o.inverse = v; }},
         {"--target", "M2", "Input", "the target shape M2, drawn for comparison",
          [](O& o, const std::string& v) { o.target = v; }},
-        {"--output", "OUTDIR", "Output", "output directory, created if needed (also -o)",
+        {"--output,-o", "OUTDIR", "Output", "output directory, created if needed (required)",
          [](O& o, const std::string& v) { o.outDir = v; }},
         {"--pattern", "NAME", "Pattern",
          "checker, stripes or position (default " + d.pattern + "); see docs/cli.md",

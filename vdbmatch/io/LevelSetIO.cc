@@ -6,6 +6,7 @@
 #include "VdbFileCheck.h"
 
 #include <openvdb/io/File.h>
+#include <openvdb/tools/LevelSetRebuild.h>
 
 #include <algorithm>
 #include <cmath>
@@ -52,16 +53,43 @@ coordString(const openvdb::Coord& c)
     return s.str();
 }
 
+/// A fog volume, or a float grid whose values (active, inactive, background) all lie in [0, 1]:
+/// a density rather than a signed distance.
+bool
+looksLikeDensity(const openvdb::FloatGrid& grid)
+{
+    if (grid.getGridClass() == openvdb::GRID_FOG_VOLUME) return true;
+    const float background = grid.background();
+    if (!(background >= 0.0f && background <= 1.0f)) return false;
+    for (auto it = grid.cbeginValueAll(); it; ++it) {
+        const float v = *it;
+        if (!(v >= 0.0f && v <= 1.0f)) return false;
+    }
+    return true;
+}
+
+/// What to do with a density given where a level set is expected.
+std::string
+densityHint(const openvdb::FloatGrid& grid)
+{
+    if (!looksLikeDensity(grid)) return "";
+    return ": it is a density (fog volume, values in [0, 1]), not a signed distance; convert it "
+           "to the level set of its iso-surface with --iso-value X (the density at the surface, "
+           "e.g. 0.5; readLevelSetAtIsoValue)";
+}
+
 } // namespace
 
 void
 checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
 {
     if (grid.getGridClass() != openvdb::GRID_LEVEL_SET) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      context + " is not a level set (grid class " +
-                          quoted(openvdb::GridBase::gridClassToString(grid.getGridClass())) +
-                          "); expected a signed distance of class 'level set'");
+        const std::string hint = densityHint(grid);
+        OPENVDB_THROW(
+            openvdb::ValueError,
+            context + " is not a level set (grid class " +
+                quoted(openvdb::GridBase::gridClassToString(grid.getGridClass())) + ")" +
+                (hint.empty() ? "; expected a signed distance of class 'level set'" : hint));
     }
     const openvdb::math::Transform& xform = grid.transform();
     if (!xform.isLinear()) {
@@ -75,11 +103,25 @@ checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
         OPENVDB_THROW(openvdb::ValueError, s.str());
     }
     const double h = grid.voxelSize()[0];
+    if (!(h > MIN_WORLD_VOXEL_SIZE)) {
+        std::ostringstream s;
+        s << context << " has the voxel size " << h << ", at or below " << MIN_WORLD_VOXEL_SIZE
+          << ", the smallest voxel OpenVDB's transforms represent (their determinant h^3 must "
+             "exceed 1e-15); rescale the input (e.g. to millimetres)";
+        OPENVDB_THROW(openvdb::ValueError, s.str());
+    }
+    if (!(h <= MAX_WORLD_VOXEL_SIZE)) {
+        std::ostringstream s;
+        s << context << " has the voxel size " << h << ", above " << MAX_WORLD_VOXEL_SIZE
+          << ": world coordinates and distances would overflow single precision; rescale the "
+             "input";
+        OPENVDB_THROW(openvdb::ValueError, s.str());
+    }
     const float background = grid.background();
     if (!std::isfinite(background) || !(background > 0.0f)) {
         std::ostringstream s;
         s << context << " has the background value " << background
-          << "; expected a positive, finite outside distance";
+          << "; expected a positive, finite outside distance" << densityHint(grid);
         OPENVDB_THROW(openvdb::ValueError, s.str());
     }
     if (grid.tree().hasActiveTiles()) {
@@ -141,11 +183,15 @@ checkInputLevelSet(const openvdb::FloatGrid& grid, const std::string& context)
     }
 }
 
+namespace {
+
+/// Reads the float grid of a file selected as readLevelSet() does, unchecked; @a context gets
+/// the grid's description for messages.
 openvdb::FloatGrid::Ptr
-readLevelSet(const std::string& path, const std::string& gridName)
+readFloatGrid(const std::string& path, const std::string& gridName, const std::string& where,
+              std::string& context)
 {
     openvdb::initialize();
-    const std::string where = "readLevelSet: file " + quoted(path);
 
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
@@ -230,9 +276,89 @@ readLevelSet(const std::string& path, const std::string& gridName)
     openvdb::FloatGrid::Ptr grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
     if (!grid) OPENVDB_THROW(openvdb::IoError, where + ": the selected grid could not be read");
 
-    checkInputLevelSet(*grid, where + ", grid " +
-                                  (name.empty() ? std::string("(unnamed)") : quoted(name)));
+    context = where + ", grid " + (name.empty() ? std::string("(unnamed)") : quoted(name));
     return grid;
+}
+
+} // namespace
+
+openvdb::FloatGrid::Ptr
+readLevelSet(const std::string& path, const std::string& gridName)
+{
+    std::string context;
+    openvdb::FloatGrid::Ptr grid =
+        readFloatGrid(path, gridName, "readLevelSet: file " + quoted(path), context);
+    checkInputLevelSet(*grid, context);
+    return grid;
+}
+
+openvdb::FloatGrid::Ptr
+levelSetAtIsoValue(const openvdb::FloatGrid& density, double isoValue, const std::string& context)
+{
+    if (density.getGridClass() == openvdb::GRID_LEVEL_SET) {
+        checkInputLevelSet(density, context);
+        return density.deepCopy();
+    }
+    if (!std::isfinite(isoValue)) {
+        OPENVDB_THROW(openvdb::ValueError, "the iso value must be finite");
+    }
+    if (!density.transform().isLinear() || !density.hasUniformVoxels()) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      context + " needs a linear transform with cubic voxels to be converted");
+    }
+    openvdb::CoordBBox box;
+    if (!density.tree().evalActiveVoxelBoundingBox(box)) {
+        OPENVDB_THROW(openvdb::ValueError, context + " is empty (no active voxels)");
+    }
+    if (box.min()[2] == box.max()[2]) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      context + " is one voxel thick: a 2D density cannot be converted by "
+                                "--iso-value; give a 2D level set slice or a polyline");
+    }
+    // Inside is where the density exceeds the iso value: negate it so that inside is below.
+    openvdb::FloatGrid::Ptr negated = density.deepCopy();
+    float lo = std::numeric_limits<float>::max(), hi = -lo;
+    for (auto it = negated->beginValueAll(); it; ++it) {
+        const float v = *it;
+        if (!std::isfinite(v)) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          context + " has a non-finite value (NaN or inf) at voxel " +
+                              coordString(it.getCoord()));
+        }
+        if (it.isValueOn()) {
+            lo = std::min(lo, v);
+            hi = std::max(hi, v);
+        }
+        it.setValue(-v);
+    }
+    if (!(lo < isoValue && hi > isoValue)) {
+        std::ostringstream s;
+        s << context << " has no iso-surface at " << isoValue << " (active values in [" << lo
+          << ", " << hi << "]); choose an iso value between them";
+        OPENVDB_THROW(openvdb::ValueError, s.str());
+    }
+    negated->tree().root().setBackground(-density.background(), /*updateChildNodes=*/false);
+    openvdb::FloatGrid::Ptr levelSet = openvdb::tools::levelSetRebuild(
+        *negated, float(-isoValue), float(ISO_LEVEL_SET_HALF_WIDTH));
+    levelSet->setName(density.getName());
+    levelSet->setGridClass(openvdb::GRID_LEVEL_SET);
+    levelSet->insertMeta("vdbmatch_iso_value", openvdb::DoubleMetadata(isoValue));
+    checkInputLevelSet(
+        *levelSet, context + " at iso value " + [&] {
+            std::ostringstream s;
+            s << isoValue;
+            return s.str();
+        }());
+    return levelSet;
+}
+
+openvdb::FloatGrid::Ptr
+readLevelSetAtIsoValue(const std::string& path, const std::string& gridName, double isoValue)
+{
+    std::string context;
+    const openvdb::FloatGrid::Ptr grid =
+        readFloatGrid(path, gridName, "readLevelSetAtIsoValue: file " + quoted(path), context);
+    return levelSetAtIsoValue(*grid, isoValue, context);
 }
 
 void

@@ -27,9 +27,40 @@ namespace vdbmatch {
 /// Thread-safety: may be called concurrently for different files.
 openvdb::FloatGrid::Ptr readLevelSet(const std::string& path, const std::string& gridName = "");
 
+/// Smallest world length OpenVDB represents as a voxel: a linear transform needs a determinant
+/// above 1e-15 (openvdb::math::ScaleMap: "Non-zero scale values required"), i.e. a uniform voxel
+/// above 1e-5. Input level sets, and every grid match writes in world units, need voxels above it.
+constexpr double MIN_WORLD_VOXEL_SIZE = 1e-5;
+/// Largest input voxel size: distances and displacements are stored in single precision in world
+/// units (largest float 3.4e38); 1e33 leaves room for shapes of 10^5 voxels across.
+constexpr double MAX_WORLD_VOXEL_SIZE = 1e33;
+
+/// Band half width (voxels) of the level sets made from densities by levelSetAtIsoValue().
+constexpr double ISO_LEVEL_SET_HALF_WIDTH = 3.0;
+
+/// The level set of the iso-surface {f = isoValue} of a density f (a fog volume, or any float
+/// grid that is not a level set), inside where f > isoValue: f is negated and rebuilt as a signed
+/// distance with openvdb::tools::levelSetRebuild (volumeToMesh at the iso value, then an exact
+/// distance in a band of ISO_LEVEL_SET_HALF_WIDTH voxels on the same transform), then checked with
+/// checkInputLevelSet(). A grid of class level set is only checked (and copied): isoValue applies
+/// to densities.
+/// @param context  names the grid in messages
+/// @throw openvdb::ValueError if the transform is not linear with cubic voxels, a value is not
+///        finite, the grid is empty or one voxel thick (2D), isoValue is not strictly between the
+///        smallest and largest active values, or the result fails checkInputLevelSet()
+openvdb::FloatGrid::Ptr levelSetAtIsoValue(const openvdb::FloatGrid& density, double isoValue,
+                                           const std::string& context);
+
+/// Reads a float grid as readLevelSet() selects it and returns levelSetAtIsoValue() of it.
+/// @throw as readLevelSet() (except the level set checks of a density) and levelSetAtIsoValue()
+openvdb::FloatGrid::Ptr readLevelSetAtIsoValue(const std::string& path, const std::string& gridName,
+                                               double isoValue);
+
 /// Checks that @a grid can be used as the signed distance of a closed surface:
-/// - grid class GRID_LEVEL_SET;
-/// - a linear transform with uniform voxel size (a similarity: no shear or non-uniform scale);
+/// - grid class GRID_LEVEL_SET (a fog volume, or a grid with every value in [0, 1], gets a
+///   message that says to convert it with an iso value: readLevelSetAtIsoValue, --iso-value);
+/// - a linear transform with uniform voxel size (a similarity: no shear or non-uniform scale),
+///   in (MIN_WORLD_VOXEL_SIZE, MAX_WORLD_VOXEL_SIZE];
 /// - finite values everywhere (active, inactive, tiles, background) and a positive background;
 /// - no active tiles, at least one active voxel, and a zero crossing (active values of both
 ///   signs);

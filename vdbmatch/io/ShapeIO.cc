@@ -41,7 +41,7 @@ isShapeFile(const std::string& path)
 }
 
 Shape
-readShape(const std::string& path, const std::string& gridName)
+readShape(const std::string& path, const std::string& gridName, std::optional<double> isoValue)
 {
     Shape in;
     in.path = path;
@@ -60,15 +60,21 @@ readShape(const std::string& path, const std::string& gridName)
     }
     const std::string ext = lowerExtension(path);
     if (ext == ".vdb") {
-        const openvdb::FloatGrid::Ptr grid = readLevelSet(path, gridName);
+        const openvdb::FloatGrid::Ptr grid = isoValue
+                                                 ? readLevelSetAtIsoValue(path, gridName, *isoValue)
+                                                 : readLevelSet(path, gridName);
         in.grid = grid->getName();
         in.transform = grid->transform().copy();
+        const bool converted =
+            isoValue && grid->getGridClass() == openvdb::GRID_LEVEL_SET &&
+            grid->getMetadata<openvdb::DoubleMetadata>("vdbmatch_iso_value") != nullptr;
         if (isSlice(*grid)) {
             in.format = "level set slice";
             in.dim = 2;
             in.curve = extractCurve(*grid);
         } else {
-            in.format = "level set";
+            in.format = converted ? "density" : "level set";
+            if (converted) in.isoValue = *isoValue;
             in.surface = extractSurface(*grid);
         }
     } else if (ext == ".obj" || ext == ".ply" || ext == ".stl") {

@@ -13,6 +13,7 @@
 
 #include <openvdb/openvdb.h>
 
+#include <optional>
 #include <string>
 
 namespace vdbmatch {
@@ -21,11 +22,13 @@ namespace vdbmatch {
 struct Shape
 {
     std::string path;
-    std::string format; ///< "level set", "level set slice", "mesh" or "polyline"
+    std::string format; ///< "level set", "level set slice", "density", "mesh" or "polyline"
     std::string grid;   ///< name of the grid read (level sets only)
     int dim = 3;        ///< 3: surface holds the shape; 2: curve holds it
     Surface<3> surface; ///< world space
     Surface<2> curve;   ///< world space, plane z = 0 (slices: the slice's x, y)
+    /// The iso value a density (format "density") was converted at, else unset.
+    std::optional<double> isoValue;
     /// Index-to-world transform of a level set input, else null.
     openvdb::math::Transform::Ptr transform;
 
@@ -50,6 +53,10 @@ bool isLevelSetFile(const std::string& path);
 /// @throw openvdb::IoError if the file is missing or unreadable
 /// @throw openvdb::ValueError for an unknown extension, a grid name given for a non-.vdb file,
 ///        or invalid content (as readLevelSet, readMesh, readPolyline, checkSurface)
-Shape readShape(const std::string& path, const std::string& gridName = "");
+/// @param isoValue  if set, a .vdb grid that is not a level set (a fog volume, a density) is
+///                  converted to the level set of its iso-surface at this value
+///                  (readLevelSetAtIsoValue; format "density"); level sets are read as usual
+Shape readShape(const std::string& path, const std::string& gridName = "",
+                std::optional<double> isoValue = std::nullopt);
 
 } // namespace vdbmatch

@@ -69,7 +69,8 @@ MultiscaleResult<D>
 MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
                          const solver::IterationObserver& observer,
                          const LevelObserver& levelObserver, bool threaded,
-                         openvdb::util::NullInterrupter* interrupter) const
+                         openvdb::util::NullInterrupter* interrupter,
+                         const InitialGuess<D>& initial) const
 {
     MultiscaleResult<D> result;
     if (interrupter) interrupter->start("vdbmatch: multiscale descent");
@@ -96,6 +97,7 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
 
         NodeVectors<D> u = result.lattice ? prolongate<D>(*result.lattice, result.displacement,
                                                           *in.lattice, threaded)
+                           : initial      ? initial(*in.lattice)
                                           : NodeVectors<D>::Zero(D, in.lattice->nodeCount());
         // Hanging nodes of the new lattice: their constraint values (equal to the prolongated
         // ones up to rounding when the lattice nests in the previous one).

@@ -58,6 +58,11 @@ template <int D> struct LevelContext
 /// on the calling thread). Signature: Level<D>(const LevelContext<D>& context).
 template <int D> using ContextLevelBuilder = std::function<Level<D>(const LevelContext<D>&)>;
 
+/// The displacement the first level starts from instead of 0 (phi = Id), on that level's
+/// lattice (D x nodeCount, Omega units), e.g. an earlier result (match --init). Called once, on
+/// the calling thread; may throw. Signature: NodeVectors<D>(const SimplexLattice<D>& lattice).
+template <int D> using InitialGuess = std::function<NodeVectors<D>(const SimplexLattice<D>&)>;
+
 /// Called when a level ends (on the calling thread), with its report.
 /// Signature: void(const solver::Report& report).
 using LevelObserver = std::function<void(const solver::Report&)>;
@@ -119,12 +124,13 @@ public:
                             const solver::IterationObserver& observer = {}, bool threaded = true,
                             openvdb::util::NullInterrupter* interrupter = nullptr) const;
 
-    /// As above, with a builder that sees the previous level's result, and a callback at the
-    /// end of each level.
+    /// As above, with a builder that sees the previous level's result, a callback at the
+    /// end of each level, and optionally the displacement of the first level (else 0).
     MultiscaleResult<D> run(const ContextLevelBuilder<D>& levels,
                             const solver::IterationObserver& observer,
                             const LevelObserver& levelObserver, bool threaded = true,
-                            openvdb::util::NullInterrupter* interrupter = nullptr) const;
+                            openvdb::util::NullInterrupter* interrupter = nullptr,
+                            const InitialGuess<D>& initial = {}) const;
 
 private:
     MultiscaleOptions mOpts;

@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# CLI tests of `vdb_match energy` on every input `match` reads: 2D polylines and one-layer .vdb
+# slices are 2D (two simplices per cell, 2D defaults), meshes are 3D; the energy equals the
+# initial energy of `match` at the same level (same reading, placement and distance fields).
+# Usage: test_cli_energy_inputs.sh VDB_MATCH ASSETS_DIR
+set -uo pipefail
+
+VDB_MATCH=${1:?usage: test_cli_energy_inputs.sh VDB_MATCH ASSETS_DIR}
+ASSETS=${2:?usage: test_cli_energy_inputs.sh VDB_MATCH ASSETS_DIR}
+SPHERE="$ASSETS/sphere.vdb"
+ELLIPSOID="$ASSETS/ellipsoid.vdb"
+FIGURE_A="$ASSETS/figure_a.polyline"
+FIGURE_B="$ASSETS/figure_b.polyline"
+SLICE_A="$ASSETS/figure_a_slice.vdb"
+SLICE_B="$ASSETS/figure_b_slice.vdb"
+SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli-energy.XXXXXX")
+trap 'rm -rf "$SCRATCH"' EXIT
+PYTHON=${VDBMATCH_PYTHON:-python3}
+
+source "$(dirname "$0")/common.sh"
+
+# same_energy NAME LEVEL SOURCE TARGET: energy --json total == match --levels L..L initial energy.
+same_energy() {
+    local name=$1 level=$2 source=$3 target=$4 dim=$5
+    count=$((count + 1))
+    "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
+        "$VDB_MATCH" "$source" "$target" -o "$SCRATCH/$name" --levels "$level..$level" --max-iterations 0 \
+            --quiet --no-inverse --no-jacobian >/dev/null 2>>"$SCRATCH/err"
+    local code=$?
+    if [ "$code" -eq 0 ] && "$PYTHON" - "$SCRATCH/$name.json" "$SCRATCH/$name/report.json" "$dim" <<'PY'; then
+import json, sys
+e = json.load(open(sys.argv[1]))
+m = json.load(open(sys.argv[2]))
+dim = int(sys.argv[3])
+assert e["dimension"] == dim and m["dimension"] == dim, (e["dimension"], m["dimension"])
+cells = 2 ** (dim * e["level"])
+assert e["simplices"] == cells * (2 if dim == 2 else 6), e["simplices"]
+initial = m["levels"][0]["initialEnergy"]
+assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
+assert e["placement"] == m["placement"], (e["placement"], m["placement"])
+assert e["parameters"]["cMatch"] == m["parameters"]["cMatch"]
+PY
+        echo "ok   $name"
+    else
+        fail "$name: energy differs from match's initial energy (exit code $code)"
+        sed 's/^/  /' "$SCRATCH/err" | tail -5
+    fi
+}
+
+same_energy polyline-2d 6 "$FIGURE_A" "$FIGURE_B" 2
+same_energy slice-2d 6 "$SLICE_A" "$SLICE_B" 2
+same_energy level-set-3d 4 "$SPHERE" "$ELLIPSOID" 3
+
+# A mesh (match's deformed.obj of the sphere) against a level set.
+"$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m" --levels 3..3 --quiet --no-inverse --no-jacobian >/dev/null 2>&1
+same_energy mesh-3d 4 "$SCRATCH/m/deformed.obj" "$ELLIPSOID" 3
+
+check polyline-human 0 '2D, level 6' '' -- energy "$FIGURE_A" "$FIGURE_B" --level 6 --quiet
+check polyline-defaults-2d 0 '"cMatch": 0.512' '' -- energy "$FIGURE_A" "$FIGURE_B" --level 5 --json --quiet
+check polyline-override 0 '"cMatch": 2' '' -- energy "$FIGURE_A" "$FIGURE_B" --level 5 --json --quiet --c-match 2
+check level-9-2d 0 'total' '' -- energy "$FIGURE_A" "$FIGURE_B" --level 9 --quiet
+check level-9-3d 3 '' 'level must be in \[1, 8\] in 3D' -- energy "$SPHERE" "$ELLIPSOID" --level 9 --quiet
+check level-12 3 '' 'level must be in \[1, 8\] in 3D, \[1, 11\] in 2D' -- energy "$FIGURE_A" "$FIGURE_B" --level 12 --quiet
+check dimension-mismatch 3 '' '2D shape but' -- energy "$FIGURE_A" "$SPHERE" --quiet
+check grid-polyline 1 '' '--grid applies to .vdb inputs' -- energy "$FIGURE_A" "$FIGURE_B" --grid surface
+check identical-2d 0 'match +0\.0+e\+00 +0\.0+e\+00' '' -- energy "$FIGURE_A" "$FIGURE_A" --level 5 --quiet
+
+echo "$((count - failures))/$count passed"
+[ "$failures" -eq 0 ]

@@ -1,0 +1,123 @@
+#!/usr/bin/env bash
+# CLI tests of `vdb_match match --init DEFORMATION.vdb`: a 4..5 result continued into 4..6 (only
+# level 6 runs) and resumed at its own last level, an interrupted result resumed at its level,
+# and the refusals: another placement, another dimension, not a deformation, a fold.
+# Usage: test_cli_init.sh VDB_MATCH ASSETS_DIR
+set -uo pipefail
+
+VDB_MATCH=${1:?usage: test_cli_init.sh VDB_MATCH ASSETS_DIR}
+ASSETS=${2:?usage: test_cli_init.sh VDB_MATCH ASSETS_DIR}
+SPHERE="$ASSETS/sphere.vdb"
+ELLIPSOID="$ASSETS/ellipsoid.vdb"
+FIGURE_A="$ASSETS/figure_a.polyline"
+FIGURE_B="$ASSETS/figure_b.polyline"
+SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli-init.XXXXXX")
+trap 'rm -rf "$SCRATCH"' EXIT
+
+source "$(dirname "$0")/common.sh"
+
+PYTHON=""
+for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
+    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
+        PYTHON=$candidate
+        break
+    fi
+done
+[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"; exit 1; }
+
+# pycheck NAME SCRIPT ARGS...: runs a python assertion script.
+pycheck() {
+    local name=$1
+    shift
+    count=$((count + 1))
+    if "$PYTHON" "$@" >"$SCRATCH/py" 2>&1; then
+        echo "ok   $name"
+    else
+        fail "$name"
+        sed 's/^/  /' "$SCRATCH/py" | tail -5
+    fi
+}
+
+COMMON=(--quiet --no-inverse --no-jacobian --threads 2)
+
+# ---------------------------------------------------------------- continue 4..5 into 4..6
+check first-run 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/a" --levels 4..5 "${COMMON[@]}"
+check continue 0 'converged|not converged' 'levels 6\.\.6, from .*levels 4\.\.5' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/b" --levels 4..6 --init "$SCRATCH/a/deformation.vdb" --no-inverse --no-jacobian
+check scratch 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/s" --levels 4..6 "${COMMON[@]}"
+pycheck continue-report - "$SCRATCH/b/report.json" "$SCRATCH/a/report.json" "$SCRATCH/s/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+a = json.load(open(sys.argv[2]))
+s = json.load(open(sys.argv[3]))
+assert r["init"]["startLevel"] == 6 and r["init"]["levels"] == "4..5", r["init"]
+assert not r["init"]["interrupted"]
+assert [l["level"] for l in r["levels"]] == [6], [l["level"] for l in r["levels"]]
+assert r["parameters"]["minLevel"] == 4 and r["parameters"]["maxLevel"] == 6
+assert r["result"]["minJacobian"] > 0
+assert a["init"] is None and s["init"] is None
+# As good as 4..6 from scratch, computing one level instead of three.
+assert r["result"]["residual"]["meanWorld"] < 1.5 * s["result"]["residual"]["meanWorld"], (r["result"], s["result"])
+assert r["result"]["energy"] < 1.1 * s["result"]["energy"]
+PY
+check resume-last-level 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/c" --levels 4..5 --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+pycheck resume-last-level-report - "$SCRATCH/c/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert [l["level"] for l in r["levels"]] == [5], r["levels"]
+PY
+# Chaining: the continued result continues again.
+check chain 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/d" --levels 4..7 --init "$SCRATCH/b/deformation.vdb" "${COMMON[@]}"
+pycheck chain-report - "$SCRATCH/d/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["init"]["levels"] == "4..6" and [l["level"] for l in r["levels"]] == [7], r["init"]
+PY
+
+# An interrupted result resumes at its own level.
+"$PYTHON" - "$SCRATCH/a/deformation.vdb" "$SCRATCH/interrupted.vdb" <<'PY'
+import sys
+import pyopenvdb as vdb
+grids, meta = vdb.readAll(sys.argv[1])
+grids[0]["is_interrupted"] = True
+vdb.write(sys.argv[2], grids=grids, metadata=meta)
+PY
+check interrupted-resumes 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/e" --levels 4..6 --init "$SCRATCH/interrupted.vdb" "${COMMON[@]}"
+pycheck interrupted-resumes-report - "$SCRATCH/e/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["init"]["interrupted"] and [l["level"] for l in r["levels"]] == [5, 6], r["levels"]
+PY
+
+# ---------------------------------------------------------------- refusals
+check other-margin 3 '' 'another placement .*--margin 0\.2, this run --margin 0\.1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --margin 0.1 --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+check other-shapes 3 '' 'another placement' -- "$FIGURE_A" "$FIGURE_A" -o "$SCRATCH/o" --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+check other-dimension 3 '' 'is a 2D deformation but the inputs are 3D' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 3..4 --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+check missing-init 2 '' 'does not exist|cannot read' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --init "$SCRATCH/nothere.vdb" "${COMMON[@]}"
+check not-a-deformation 3 '' "no grid named 'displacement'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 3..4 --init "$SPHERE" "${COMMON[@]}"
+check init-missing-value 1 '' '--init expects a value DEFORMATION.vdb' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --init
+
+# A deformation that mirrors x in the middle of the domain folds on any lattice.
+"$PYTHON" - "$SCRATCH/a/deformation.vdb" "$SCRATCH/folded.vdb" <<'PY'
+import sys
+import pyopenvdb as vdb
+grids, meta = vdb.readAll(sys.argv[1])
+g = grids[0]
+n = g.evalActiveVoxelBoundingBox()[1][0]
+h = g.transform.voxelSize()[0]
+acc = g.getAccessor()
+for i in range(n + 1):
+    for j in range(n + 1):
+        if abs(i - n / 2) < n / 5 and abs(j - n / 2) < n / 5:
+            acc.setValueOn((i, j, 0), (-2.0 * (i - n / 2) * h, 0.0, 0.0))
+vdb.write(sys.argv[2], grids=[g], metadata=meta)
+PY
+check folds 3 '' 'sampled at the nodes of the level 6 lattice folds' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --init "$SCRATCH/folded.vdb" "${COMMON[@]}"
+count=$((count + 1))
+if [ -e "$SCRATCH/o/deformation.vdb" ] || [ -e "$SCRATCH/o/report.json" ]; then
+    fail "refusals-write-nothing: a refused --init left outputs in OUTDIR"
+else
+    echo "ok   refusals-write-nothing"
+fi
+
+echo "$((count - failures))/$count passed"
+[ "$failures" -eq 0 ]

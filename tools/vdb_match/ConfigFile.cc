@@ -1,0 +1,116 @@
+/// @file ConfigFile.cc
+#include "ConfigFile.h"
+
+#include <vdbmatch/Parameters.h>
+
+#include <openvdb/Exceptions.h>
+
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+namespace vdbmatch {
+namespace cli {
+
+const std::vector<std::pair<const char*, const char*>>&
+configKeys()
+{
+    static const std::vector<std::pair<const char*, const char*>> keys = {
+        {"energy", "--energy"},
+        {"cMatch", "--c-match"},
+        {"cMem", "--c-mem"},
+        {"cBend", "--c-bend"},
+        {"cVol", "--c-vol"},
+        {"q", "--q"},
+        {"theta", "--theta"},
+        {"tau", "--tau"},
+        {"hessianSmoothing", "--hessian-smoothing"},
+        {"minLevel", "--min-level"},
+        {"maxLevel", "--max-level"},
+        {"margin", "--margin"},
+        {"refinementMarginCells", "--refine-margin"},
+        {"metricTauFactor", "--metric-tau"},
+        {"optimizer", "--optimizer"},
+        {"initialStep", "--initial-step"},
+        {"metricTolerance", "--metric-tolerance"},
+        {"maxIterations", "--max-iterations"},
+        {"energyTolerance", "--energy-tolerance"},
+        {"settleTolerance", "--settle-tolerance"},
+        {"toleranceCoarsening", "--tolerance-coarsening"},
+        {"relativeGradientTolerance", "--gradient-tolerance"},
+    };
+    return keys;
+}
+
+std::vector<ConfigSetting>
+parseConfig(const std::string& text, const std::string& path)
+{
+    using Json = nlohmann::ordered_json;
+    const Json doc = Json::parse(text, nullptr, /*allow_exceptions=*/false);
+    if (doc.is_discarded() || !doc.is_object()) {
+        OPENVDB_THROW(openvdb::ValueError, "--config: '"
+                                               << path
+                                               << "' is not a JSON object (a report.json or its "
+                                                  "\"parameters\")");
+    }
+    const Json& params = doc.contains("parameters") ? doc["parameters"] : doc;
+    if (!params.is_object()) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "--config: \"parameters\" in '" << path << "' is not an object");
+    }
+    std::vector<ConfigSetting> settings;
+    for (const auto& [key, value] : params.items()) {
+        // Written by match but fixed by the method (tab:parameters): must hold its value.
+        if (key == "sigmaFactor") {
+            if (!value.is_number() || value.get<double>() != EnergyParameters().sigmaFactor) {
+                OPENVDB_THROW(openvdb::ValueError, "--config: sigmaFactor is fixed at "
+                                                       << EnergyParameters().sigmaFactor
+                                                       << " (sigma = 2h)");
+            }
+            continue;
+        }
+        const char* option = nullptr;
+        for (const auto& [name, opt] : configKeys())
+            if (key == name) option = opt;
+        if (!option) {
+            std::string known;
+            for (const auto& kv : configKeys())
+                known += std::string(known.empty() ? "" : ", ") + kv.first;
+            OPENVDB_THROW(openvdb::ValueError, "--config: unknown key '" << key << "' in '" << path
+                                                                         << "' (known: " << known
+                                                                         << ")");
+        }
+        if (!value.is_number() && !value.is_string()) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "--config: '" << key << "' must be a number or a string");
+        }
+        settings.push_back(
+            {key, option, value.is_string() ? value.get<std::string>() : value.dump()});
+    }
+    return settings;
+}
+
+std::vector<ConfigSetting>
+readConfig(const std::string& path)
+{
+    std::error_code ec;
+    const bool directory = std::filesystem::is_directory(path, ec);
+    std::ifstream in(path, std::ios::binary);
+    if (!in || directory) {
+        OPENVDB_THROW(openvdb::IoError, "--config: cannot read '" << path << "'");
+    }
+    const auto size = std::filesystem::file_size(path, ec);
+    if (!ec && size > MAX_CONFIG_BYTES) {
+        OPENVDB_THROW(openvdb::IoError, "--config: '" << path << "' has " << size
+                                                      << " bytes; a parameter file has a few KB "
+                                                         "(at most "
+                                                      << MAX_CONFIG_BYTES << ")");
+    }
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    return parseConfig(text, path);
+}
+
+} // namespace cli
+} // namespace vdbmatch
