@@ -316,8 +316,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 // Lipschitz with constant `lipschitz`): false means no point of the cell needs
                 // side h.
                 Real d;
-                bool near = !d1.sampleDistance(c, d) ||
-                            std::abs(d) < reach1 + radius + tierSlack(d1, c);
+                bool near =
+                    !d1.sampleDistance(c, d) || std::abs(d) < reach1 + radius + tierSlack(d1, c);
                 if (!near) {
                     Vec<D> y = c;
                     if (previous) {
