@@ -83,10 +83,20 @@ wrapHelp(const std::string& left, const std::string& text)
         out += std::string(HELP_COLUMN - out.size(), ' ');
     }
     size_t column = HELP_COLUMN;
-    std::istringstream words(text);
+    // A newline in the text starts a new line (e.g. the paper's name of an option).
+    std::string flat = text;
+    for (size_t at = flat.find('\n'); at != std::string::npos; at = flat.find('\n', at))
+        flat.replace(at, 1, " \x1f ");
+    std::istringstream words(flat);
     std::string word;
     bool firstWord = true;
     while (words >> word) {
+        if (word == "\x1f") {
+            out += "\n" + std::string(HELP_COLUMN, ' ');
+            column = HELP_COLUMN;
+            firstWord = true;
+            continue;
+        }
         if (!firstWord && column + 1 + word.size() > LINE_WIDTH) {
             out += "\n" + std::string(HELP_COLUMN, ' ');
             column = HELP_COLUMN;

@@ -93,26 +93,33 @@ energyOptionTable()
              o.kind = parseEnergyKind(v);
          }},
         {"--c-match", "X", "Energy (paper tab:parameters)",
-         "weight of the matching term (default " + both(p3.cMatch, p2.cMatch) + ")",
+         "weight of the matching term (default " + both(p3.cMatch, p2.cMatch) + ")" +
+             "\npaper: c_match, eq:EsymMatch",
          [](O& o, const std::string& v) { o.cMatch = parseDouble("--c-match", v); }},
         {"--c-mem", "X", "Energy (paper tab:parameters)",
-         "weight of the membrane term (default " + both(p3.cMem, p2.cMem) + ")",
+         "weight of the membrane term (default " + both(p3.cMem, p2.cMem) + ")" +
+             "\npaper: c_mem, eq:EsymMem",
          [](O& o, const std::string& v) { o.cMem = parseDouble("--c-mem", v); }},
         {"--c-bend", "X", "Energy (paper tab:parameters)",
-         "weight of the bending term (default " + both(p3.cBend, p2.cBend) + ")",
+         "weight of the bending term (default " + both(p3.cBend, p2.cBend) + ")" +
+             "\npaper: c_bend, eq:EsymBend",
          [](O& o, const std::string& v) { o.cBend = parseDouble("--c-bend", v); }},
         {"--c-vol", "X", "Energy (paper tab:parameters)",
-         "weight of the volume term, times sigma^theta (default " + both(p3.cVol, p2.cVol) + ")",
+         "weight of the volume term, times sigma^theta (default " + both(p3.cVol, p2.cVol) + ")" +
+             "\npaper: c_vol, eq:EsymVol",
          [](O& o, const std::string& v) { o.cVol = parseDouble("--c-vol", v); }},
         {"--q", "X", "Energy (paper tab:parameters)",
-         "matching exponent, weight sigma^-q (default " + both(p3.q, p2.q) + ")",
+         "matching exponent, weight sigma^-q (default " + both(p3.q, p2.q) + ")" +
+             "\npaper: q, eq:EsymMatch",
          [](O& o, const std::string& v) { o.q = parseDouble("--q", v); }},
         {"--theta", "X", "Energy (paper tab:parameters)",
-         "volume exponent, weight sigma^theta (default " + both(p3.theta, p2.theta) + ")",
+         "volume exponent, weight sigma^theta (default " + both(p3.theta, p2.theta) + ")" +
+             "\npaper: theta, eq:EsymVol",
          [](O& o, const std::string& v) { o.theta = parseDouble("--theta", v); }},
         {"--tau", "X", "Energy (paper tab:parameters)",
          "eigenvalue floor of the regularized shape operator, 1/unit-box length, > 0 (default " +
-             formatNumber(d.tau) + ")",
+             formatNumber(d.tau) + ")" +
+             "\npaper: tau, eq:defSi",
          [](O& o, const std::string& v) { o.tau = parseDouble("--tau", v); }},
         {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
          "[1,2,1]/4 smoothing passes of the distance Hessian, >= 0 (default " +
