@@ -165,15 +165,20 @@ summarize(const SimplexLattice<D>& lattice)
     return s;
 }
 
-template <int D>
+namespace {
+
+/// Reduces value(D phi) over every simplex of the lattice (D phi of Id + u, exact per simplex):
+/// parallel over cells, combined with @a combine from @a init.
+template <int D, typename Value, typename Combine>
 Real
-lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
+reduceSimplexJacobians(const SimplexLattice<D>& lattice, const NodeVectors<D>& u, Real init,
+                       const Value& value, const Combine& combine)
 {
     const auto& cells = lattice.cells();
     const auto& paths = KuhnSplit<D>::path();
     const auto& axes = KuhnSplit<D>::axis();
     return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, cells.size()), Real(1),
+        tbb::blocked_range<std::size_t>(0, cells.size()), init,
         [&](const tbb::blocked_range<std::size_t>& r, Real best) {
             for (std::size_t ci = r.begin(); ci != r.end(); ++ci) {
                 const auto& cell = cells[ci];
@@ -186,13 +191,27 @@ lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
                         const auto to = cell.corners[paths[p][m]];
                         A.col(a) += (u.col(to) - u.col(from)) / side;
                     }
-                    // Largest singular value: sqrt of the largest eigenvalue of A^T A.
-                    Eigen::SelfAdjointEigenSolver<Mat<D>> eig;
-                    eig.computeDirect(A.transpose() * A, Eigen::EigenvaluesOnly);
-                    best = std::max(best, std::sqrt(std::max(Real(0), eig.eigenvalues()[D - 1])));
+                    best = combine(best, value(A));
                 }
             }
             return best;
+        },
+        combine);
+}
+
+} // namespace
+
+template <int D>
+Real
+lipschitzBound(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
+{
+    // Largest singular value: sqrt of the largest eigenvalue of A^T A.
+    return reduceSimplexJacobians<D>(
+        lattice, u, Real(1),
+        [](const Mat<D>& A) {
+            Eigen::SelfAdjointEigenSolver<Mat<D>> eig;
+            eig.computeDirect(A.transpose() * A, Eigen::EigenvaluesOnly);
+            return std::sqrt(std::max(Real(0), eig.eigenvalues()[D - 1]));
         },
         [](Real a, Real b) { return std::max(a, b); });
 }
@@ -201,28 +220,8 @@ template <int D>
 Real
 minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
 {
-    const auto& cells = lattice.cells();
-    const auto& paths = KuhnSplit<D>::path();
-    const auto& axes = KuhnSplit<D>::axis();
-    return tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, cells.size()), INF,
-        [&](const tbb::blocked_range<std::size_t>& r, Real best) {
-            for (std::size_t ci = r.begin(); ci != r.end(); ++ci) {
-                const auto& cell = cells[ci];
-                const Real side = lattice.h() * Real(1 << cell.log2Size);
-                for (std::size_t p = 0; p < paths.size(); ++p) {
-                    Mat<D> A = Mat<D>::Identity();
-                    for (int m = 1; m <= D; ++m) {
-                        const int a = axes[p][m];
-                        const auto from = cell.corners[paths[p][m - 1]];
-                        const auto to = cell.corners[paths[p][m]];
-                        A.col(a) += (u.col(to) - u.col(from)) / side;
-                    }
-                    best = std::min(best, A.determinant());
-                }
-            }
-            return best;
-        },
+    return reduceSimplexJacobians<D>(
+        lattice, u, INF, [](const Mat<D>& A) { return A.determinant(); },
         [](Real a, Real b) { return std::min(a, b); });
 }
 
