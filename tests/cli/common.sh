@@ -41,3 +41,18 @@ check() {
         echo "ok   $name"
     fi
 }
+
+# find_python MODULES: sets PYTHON to the first of $VDBMATCH_PYTHON, /usr/bin/python3 and python3
+# that can import MODULES (e.g. "pyopenvdb, numpy"); exits with a "FAIL setup" line if none can.
+find_python() {
+    PYTHON=""
+    local candidate
+    for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
+        if [ -n "$candidate" ] && "$candidate" -c "import $1" >/dev/null 2>&1; then
+            PYTHON=$candidate
+            return 0
+        fi
+    done
+    echo "FAIL setup: no python with $1 (set VDBMATCH_PYTHON)"
+    exit 1
+}

@@ -15,19 +15,8 @@ trap 'rm -rf "$SCRATCH"' EXIT
 
 source "$(dirname "$0")/common.sh"
 
-
 # ---------------------------------------------------------------- invalid inputs
-PYTHON=""
-for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
-    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
-        PYTHON=$candidate
-        break
-    fi
-done
-if [ -z "$PYTHON" ]; then
-    echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"
-    exit 1
-fi
+find_python "pyopenvdb"
 "$PYTHON" - "$SCRATCH" <<'PY' || { echo "FAIL setup: could not write the invalid inputs"; exit 1; }
 import sys
 import pyopenvdb as vdb

@@ -14,14 +14,7 @@ trap 'rm -rf "$SCRATCH"' EXIT
 
 source "$(dirname "$0")/common.sh"
 
-PYTHON=""
-for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
-    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
-        PYTHON=$candidate
-        break
-    fi
-done
-[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"; exit 1; }
+find_python "pyopenvdb"
 
 # ---------------------------------------------------------------- voxel sizes
 # OpenVDB cannot create a transform with voxels of 1e-30 (its determinant must exceed 1e-15), so

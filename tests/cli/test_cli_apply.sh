@@ -17,14 +17,7 @@ trap 'rm -rf "$SCRATCH"' EXIT
 
 source "$(dirname "$0")/common.sh"
 
-PYTHON=""
-for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
-    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb, numpy" >/dev/null 2>&1; then
-        PYTHON=$candidate
-        break
-    fi
-done
-[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb and numpy (set VDBMATCH_PYTHON)"; exit 1; }
+find_python "pyopenvdb, numpy"
 
 # pycheck NAME SCRIPT ARGS...: runs a python check, which prints 'ok' or a reason.
 pycheck() {

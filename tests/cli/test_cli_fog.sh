@@ -15,14 +15,7 @@ trap 'rm -rf "$SCRATCH"' EXIT
 
 source "$(dirname "$0")/common.sh"
 
-PYTHON=""
-for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
-    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
-        PYTHON=$candidate
-        break
-    fi
-done
-[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"; exit 1; }
+find_python "pyopenvdb"
 
 # A ball of density: 1 inside, 0 outside, 0.5 at radius 1.5 around (2, 2, 2) (voxel 0.1), as a
 # fog volume and as an unclassified float grid; level set spheres of radius 1.5 and 1.2.

@@ -17,14 +17,7 @@ trap 'rm -rf "$SCRATCH"' EXIT
 source "$(dirname "$0")/common.sh"
 
 
-PYTHON=""
-for candidate in "${VDBMATCH_PYTHON:-}" /usr/bin/python3 python3; do
-    if [ -n "$candidate" ] && "$candidate" -c "import pyopenvdb" >/dev/null 2>&1; then
-        PYTHON=$candidate
-        break
-    fi
-done
-[ -n "$PYTHON" ] || { echo "FAIL setup: no python with pyopenvdb (set VDBMATCH_PYTHON)"; exit 1; }
+find_python "pyopenvdb"
 
 # Invalid inputs.
 printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' >"$SCRATCH/open.obj"
