@@ -360,6 +360,14 @@ TEST_F(LevelSetIOTest, FuzzedFilesAreIoErrors)
         // Found by the fuzzer (second run): a fixed-size metadata value whose stored byte count
         // differs from its size; OpenVDB then read a 1.7 GB name length (9.4 GB resident).
         {"vdb_metadata_size_mismatch_oom.vdb", "value of"},
+        // Found by the fuzzer (12-minute run of 2026-11-25): a "__delayedload" value whose own
+        // leaf count or blosc block sizes (1.6e9 to 4.3e9) disagree with its 21 stored bytes;
+        // io::DelayedLoadMetadata::readValue allocated 1.9 to 4.3 GB from them.
+        {"vdb_delayedload_oom_265ed0b4.vdb", "delayed-load value"},
+        {"vdb_delayedload_oom_4cc03602.vdb", "delayed-load value"},
+        {"vdb_delayedload_oom_603b87aa.vdb", "delayed-load value"},
+        {"vdb_delayedload_oom_68bb8da5.vdb", "delayed-load value"},
+        {"vdb_delayedload_oom_72e9a3cf.vdb", "delayed-load value"},
         // Crafted from a valid file: one field changed each.
         {"vdb_root_children_4e9.vdb", "4294967295 children"},
         {"vdb_root_tiles_4e9.vdb", "4294967295 root tiles"},

@@ -33,6 +33,9 @@ constexpr std::uint64_t MIN_METADATA_ITEM_BYTES = 12;
 constexpr std::uint64_t MIN_GRID_DESCRIPTOR_BYTES = 3 * 4 + 3 * 8;
 /// Longest grid or map type name accepted (the longest OpenVDB names are ~40 characters).
 constexpr std::uint64_t MAX_TYPE_NAME_BYTES = 256;
+/// Header of a blosc buffer: version, flags, type size, then uncompressed, block and compressed
+/// byte counts (uint32 each, little-endian).
+constexpr std::uint64_t BLOSC_HEADER_BYTES = 16;
 
 /// Bytes of a value of a tree's value type, from the grid type name ("Tree_float_5_4_3",
 /// optionally with the half-float suffix); 0 for a type this check does not know (bool and
@@ -205,8 +208,65 @@ public:
                 fail(std::string("is corrupt: ") + what + " has a '" + type + "' value of " +
                      std::to_string(n) + " bytes, expected " + std::to_string(fixed));
             }
-            skip(n, what);
+            if (type == "__delayedload" && n > 0) {
+                delayedLoadValue(n, what);
+            } else {
+                skip(n, what);
+            }
         }
+    }
+
+    /// The value of a "__delayedload" item (openvdb io::DelayedLoadMetadata::readValue), @a n
+    /// bytes: Index32 count, then a mask of count bytes and optionally count 8-byte sizes, each
+    /// stored raw or as one blosc buffer (Index32 byte count first; 0xffffffff: no sizes).
+    /// OpenVDB sizes its arrays from count and from the blosc headers, not from @a n: every
+    /// one of them must agree with @a n.
+    void delayedLoadValue(std::uint32_t n, const char* what)
+    {
+        require(n, what);
+        const std::uint64_t end = mPos + n;
+        auto inside = [&](std::uint64_t bytes) {
+            if (bytes > end - mPos) {
+                fail(std::string("is corrupt: ") + what +
+                     " has a delayed-load value that claims more bytes than its " +
+                     std::to_string(n));
+            }
+        };
+        inside(2 * sizeof(std::uint32_t));
+        const std::uint32_t count = value<std::uint32_t>(what);
+        // One mask byte per leaf node, and a leaf takes more than a byte of the file.
+        if (count > mSize) {
+            fail(std::string("is corrupt: ") + what + " has a delayed-load value for " +
+                 std::to_string(count) + " leaf nodes in a file of " + std::to_string(mSize) +
+                 " bytes");
+        }
+        auto array = [&](std::uint32_t stored, std::uint64_t arrayBytes) {
+            if (stored == 0) {
+                inside(arrayBytes);
+                skip(arrayBytes, what);
+                return;
+            }
+            // A blosc buffer: its header (16 bytes) gives the uncompressed and compressed sizes,
+            // which blosc trusts.
+            inside(stored);
+            if (stored < BLOSC_HEADER_BYTES) fail(std::string("is corrupt: ") + what);
+            unsigned char header[BLOSC_HEADER_BYTES];
+            bytes(header, BLOSC_HEADER_BYTES, what);
+            std::uint32_t uncompressed, compressed;
+            std::memcpy(&uncompressed, header + 4, 4);
+            std::memcpy(&compressed, header + 12, 4);
+            if (uncompressed != arrayBytes || compressed != stored) {
+                fail(std::string("is corrupt: ") + what +
+                     " has a delayed-load value whose compressed block sizes disagree");
+            }
+            skip(stored - BLOSC_HEADER_BYTES, what);
+        };
+        array(value<std::uint32_t>(what), count);
+        inside(sizeof(std::uint32_t));
+        const std::uint32_t sizes = value<std::uint32_t>(what);
+        if (sizes != std::numeric_limits<std::uint32_t>::max())
+            array(sizes, std::uint64_t(count) * sizeof(std::uint64_t));
+        seek(end);
     }
 
     [[noreturn]] void fail(const std::string& problem) const
