@@ -4,6 +4,8 @@
 
 #include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/io/LevelSetIO.h>
+#include <vdbmatch/io/VdbFileCheck.h>
+#include <vdbmatch/io/VdbFileCheck.h>
 
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
@@ -402,6 +404,28 @@ TEST_F(LevelSetIOTest, FuzzedHugeCompressedBlockIsAnIoError)
 // checkVdbFileStructure walks the nodes of a grid the way OpenVDB reads them: it must accept
 // every compression and half-float setting OpenVDB writes (vdb_match --half writes half
 // floats), for level sets and deformation grids.
+// Every file OpenVDB writes has a "__delayedload" metadata item per grid; for a grid of fewer
+// than 128 leaves its blosc-compressed mask decompresses to 128 padded bytes, not to one byte
+// per leaf (the check of fuzzing finding 6 first rejected such files).
+TEST_F(LevelSetIOTest, StructureCheckAcceptsSmallGridsDelayedLoadMetadata)
+{
+    for (const float radius : {2.0f, 6.0f, 40.0f}) {
+        auto grid = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(
+            radius, openvdb::Vec3f(0.0f), 1.0f, 3.0f);
+        grid->setName("surface");
+        const std::string path = mDir.file("small.vdb");
+        {
+            openvdb::io::File file(path);
+            file.write({grid});
+            file.close();
+        }
+        SCOPED_TRACE("radius " + std::to_string(radius) + ", " +
+                     std::to_string(grid->tree().leafCount()) + " leaves");
+        EXPECT_NO_THROW(checkVdbFileStructure(path, "small.vdb"));
+        EXPECT_NO_THROW(readLevelSet(path));
+    }
+}
+
 TEST_F(LevelSetIOTest, StructureCheckAcceptsEveryCompressionAndHalfFloats)
 {
     const uint32_t settings[] = {openvdb::io::COMPRESS_NONE, openvdb::io::COMPRESS_ZIP,

@@ -36,6 +36,8 @@ constexpr std::uint64_t MAX_TYPE_NAME_BYTES = 256;
 /// Header of a blosc buffer: version, flags, type size, then uncompressed, block and compressed
 /// byte counts (uint32 each, little-endian).
 constexpr std::uint64_t BLOSC_HEADER_BYTES = 16;
+/// OpenVDB pads shorter buffers to this size before blosc compression (io/StreamCompression).
+constexpr std::uint64_t BLOSC_PAD_BYTES = 128;
 
 /// Bytes of a value of a tree's value type, from the grid type name ("Tree_float_5_4_3",
 /// optionally with the half-float suffix); 0 for a type this check does not know (bool and
@@ -255,9 +257,15 @@ public:
             std::uint32_t uncompressed, compressed;
             std::memcpy(&uncompressed, header + 4, 4);
             std::memcpy(&compressed, header + 12, 4);
-            if (uncompressed != arrayBytes || compressed != stored) {
+            // OpenVDB pads buffers shorter than BLOSC_PAD_BYTES before compressing them
+            // (compression::bloscCompress), so a short array decompresses to 128 bytes.
+            const std::uint64_t padded = std::max<std::uint64_t>(arrayBytes, BLOSC_PAD_BYTES);
+            if (uncompressed < arrayBytes || uncompressed > padded || compressed != stored) {
                 fail(std::string("is corrupt: ") + what +
-                     " has a delayed-load value whose compressed block sizes disagree");
+                     " has a delayed-load value whose compressed block sizes disagree (" +
+                     std::to_string(uncompressed) + " for " + std::to_string(arrayBytes) +
+                     " bytes, " + std::to_string(compressed) + " stored in " +
+                     std::to_string(stored) + ")");
             }
             skip(stored - BLOSC_HEADER_BYTES, what);
         };
