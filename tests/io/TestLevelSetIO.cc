@@ -5,7 +5,6 @@
 #include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/io/LevelSetIO.h>
 #include <vdbmatch/io/VdbFileCheck.h>
-#include <vdbmatch/io/VdbFileCheck.h>
 
 #include <gtest/gtest.h>
 #include <openvdb/io/File.h>
