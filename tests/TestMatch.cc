@@ -13,23 +13,12 @@
 
 #include <cmath>
 #include <cstdio>
+#include <support/TestSurfaces.h>
 
 using namespace vdbmatch;
+using test::ellipseCurve;
 
 namespace {
-
-/// A closed polygon with n vertices on the ellipse centre + (a cos t, b sin t), counter-clockwise.
-Surface<2>
-ellipseCurve(const Vec<2>& centre, Real a, Real b, int n)
-{
-    Surface<2> s;
-    for (int i = 0; i < n; ++i) {
-        const Real t = 2 * M_PI * i / n;
-        s.points.push_back(centre + Vec<2>(a * std::cos(t), b * std::sin(t)));
-        s.elements.push_back({int32_t(i), int32_t((i + 1) % n)});
-    }
-    return s;
-}
 
 /// A closed triangulated ellipsoid: a UV sphere (poles + rings) scaled by the semi-axes.
 Surface<3>

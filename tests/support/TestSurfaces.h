@@ -16,6 +16,19 @@
 namespace vdbmatch {
 namespace test {
 
+/// A closed polygon with n vertices on the ellipse centre + (a cos t, b sin t), counter-clockwise.
+inline Surface<2>
+ellipseCurve(const Vec<2>& centre, Real a, Real b, int n)
+{
+    Surface<2> s;
+    for (int i = 0; i < n; ++i) {
+        const Real t = 2 * M_PI * i / n;
+        s.points.push_back(centre + Vec<2>(a * std::cos(t), b * std::sin(t)));
+        s.elements.push_back({int32_t(i), int32_t((i + 1) % n)});
+    }
+    return s;
+}
+
 /// The cube [lo, lo + side]^3 as 12 outward-oriented triangles on 8 vertices.
 inline Surface<3>
 cubeMesh(double lo = 0.0, double side = 1.0)
