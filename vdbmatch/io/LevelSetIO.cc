@@ -5,6 +5,8 @@
 #include "AtomicFile.h"
 #include "VdbFileCheck.h"
 
+#include <vdbmatch/io/InputFile.h>
+
 #include <openvdb/io/File.h>
 #include <openvdb/tools/LevelSetRebuild.h>
 
@@ -193,14 +195,7 @@ readFloatGrid(const std::string& path, const std::string& gridName, const std::s
 {
     openvdb::initialize();
 
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status)) {
-        OPENVDB_THROW(openvdb::IoError, where + " does not exist");
-    }
-    if (std::filesystem::is_directory(status)) {
-        OPENVDB_THROW(openvdb::IoError, where + " is a directory");
-    }
+    checkInputFile(path, where);
     // OpenVDB allocates from the lengths in the file before reading the bytes (a truncated
     // file made it allocate gigabytes): check them against the file size first.
     checkVdbFileStructure(path, where);

@@ -4,6 +4,8 @@
 
 #include "AtomicFile.h"
 
+#include <vdbmatch/io/InputFile.h>
+
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
@@ -55,18 +57,7 @@ std::string
 readBytes(const std::string& path, const std::string& caller)
 {
     const std::string where = caller + ": file " + quoted(path);
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        OPENVDB_THROW(openvdb::IoError, where + " does not exist");
-    if (std::filesystem::is_directory(status)) {
-        OPENVDB_THROW(openvdb::IoError, where + " is a directory");
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) OPENVDB_THROW(openvdb::IoError, where + " cannot be opened");
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) OPENVDB_THROW(openvdb::IoError, where + " cannot be read");
-    return bytes;
+    return readInputFile(path, where);
 }
 
 /// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".

@@ -5,6 +5,8 @@
 
 #include "AtomicFile.h"
 
+#include <vdbmatch/io/InputFile.h>
+
 #include <openvdb/openvdb.h>
 
 #include <algorithm>
@@ -159,21 +161,10 @@ PointTable::read(const std::string& path, int dimension)
     }
 
     const std::string where = "PointTable::read: file " + quoted(path);
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        OPENVDB_THROW(openvdb::IoError, where + " does not exist");
-    if (std::filesystem::is_directory(status)) {
-        OPENVDB_THROW(openvdb::IoError, where + " is a directory");
-    }
-    std::ifstream in(path, std::ios::binary);
-    if (!in) OPENVDB_THROW(openvdb::IoError, where + " cannot be opened");
-
     PointTable table;
     table.mPath = path;
     table.mDimension = dimension;
-    table.mBytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (in.bad()) OPENVDB_THROW(openvdb::IoError, where + " cannot be read");
+    table.mBytes = readInputFile(path, where);
     table.parse(ext == ".csv");
     table.mOriginalPositions = table.mPositions;
     return table;

@@ -2,6 +2,8 @@
 /// @brief Bounds check of the structure of a .vdb file before OpenVDB reads it.
 #include "VdbFileCheck.h"
 
+#include <vdbmatch/io/InputFile.h>
+
 #include <openvdb/io/Compression.h>
 #include <openvdb/openvdb.h>
 
@@ -436,13 +438,8 @@ private:
 void
 checkVdbFileStructure(const std::string& path, const std::string& where)
 {
+    checkInputFile(path, where);
     std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        OPENVDB_THROW(openvdb::IoError, where + " does not exist");
-    if (std::filesystem::is_directory(status)) {
-        OPENVDB_THROW(openvdb::IoError, where + " is a directory");
-    }
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
     if (ec) OPENVDB_THROW(openvdb::IoError, where + " cannot be read (" + ec.message() + ")");
 
