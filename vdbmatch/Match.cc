@@ -260,6 +260,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             Clock::time_point t0 = Clock::now();
             multiscale::Level<D> level;
             level.shape1 = buildShapeSampler<D>(unitSource, l, opts.sampler);
+            level.surfacePoints = &unitSource.points;
             level.shape2 = buildShapeSampler<D>(unitTarget, l, opts.sampler);
             summary.fieldSeconds = secondsSince(t0);
 

@@ -519,3 +519,109 @@ TEST(Descent, RejectsInvalidSettleTolerance)
     m.toleranceCoarsening = 0.5;
     EXPECT_THROW(m.validate(), openvdb::ValueError);
 }
+
+namespace {
+
+/// The probe of the points on M1 on @a lattice (every point lies in a cell of a dense lattice).
+SurfaceProbe<2>
+probeOnM1(const SimplexLattice<2>& lattice, const std::vector<Vec<2>>& points)
+{
+    const PiecewiseLinearInterpolator<2> locator(lattice);
+    PiecewiseLinearInterpolator<2>::Location loc;
+    SurfaceProbe<2> probe;
+    for (const Vec<2>& x : points)
+        if (locator.locate(x, loc)) probe.add(loc.nodes, loc.weights);
+    return probe;
+}
+
+} // namespace
+
+TEST(SurfaceProbe, EqualsThePiecewiseLinearInterpolant)
+{
+    // The probe's displacements are the P1 interpolant of u at the points, as evaluated by
+    // PiecewiseLinearInterpolator, for an arbitrary nodal field.
+    const auto lattice = SimplexLattice<2>::dense(4);
+    const std::vector<Vec<2>> points = Shapes<2>().pointsOnM1();
+    const SurfaceProbe<2> probe = probeOnM1(lattice, points);
+    ASSERT_EQ(probe.size(), points.size());
+    NodeVectors<2> u(2, lattice.nodeCount());
+    for (Eigen::Index i = 0; i < u.cols(); ++i)
+        u.col(i) = Vec<2>(std::sin(3.0 * Real(i)), std::cos(5.0 * Real(i))) * 1e-2;
+    NodeVectors<2> atPoints;
+    probe.displacements(u, atPoints);
+    const PiecewiseLinearInterpolator<2> phi(lattice);
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        Vec<2> expected;
+        ASSERT_TRUE(phi.evaluate(u, points[k], expected));
+        EXPECT_NEAR((atPoints.col(Eigen::Index(k)) - expected).norm(), 0.0, 1e-15) << k;
+    }
+    NodeVectors<2> shifted = atPoints;
+    shifted.row(0).array() += 3e-3;
+    EXPECT_NEAR(SurfaceProbe<2>::meanDistance(shifted, atPoints), 3e-3, 1e-15);
+}
+
+TEST(Descent, SurfaceTestEndsALevelWhenTheSurfaceStopsMoving)
+{
+    // The surface test (DescentOptions::surfaceTolerance) ends the run when phi on M1 moved by
+    // less than the tolerance over the last w iterations (path length). It holds at the last
+    // iteration and at no earlier one, it stops before the energy test, and the surface it
+    // stops at is within a small fraction of h of the one the energy test reaches: what the
+    // iterations it saves would have changed on M1.
+    const EnergyParameters params = EnergyParameters::defaults(2);
+    Problem<2> problem(params);
+    const auto lattice = SimplexLattice<2>::dense(5);
+    const Real h = lattice.h();
+    const Energy<2> energy(lattice, *problem.shape1, *problem.shape2, params,
+                           EnergyKind::Symmetric);
+    const H1Metric<2> metric(lattice, DEFAULT_METRIC_TAU_FACTOR * energy.sigma() * energy.sigma());
+    const SurfaceProbe<2> probe = probeOnM1(lattice, problem.shapes.pointsOnM1());
+
+    DescentOptions full;
+    full.energyTolerance = 1e-6;
+    DescentOptions settled = full;
+    settled.surfaceTolerance = 0.02 * h;
+    NodeVectors<2> surface[2];
+    Report reports[2];
+    for (int k = 0; k < 2; ++k) {
+        const DescentOptions& opts = k == 0 ? full : settled;
+        Descent<2> descent(energy, metric, opts);
+        descent.setSurfaceProbe(&probe);
+        std::vector<Real> motion;
+        NodeVectors<2> u = NodeVectors<2>::Zero(2, lattice.nodeCount());
+        reports[k] =
+            descent.run(u, [&](const IterationInfo& i) { motion.push_back(i.surfaceMotion); });
+        ASSERT_EQ(reports[k].status, Status::Converged);
+        probe.displacements(u, surface[k]);
+        const std::size_t w = std::size_t(opts.energyWindow);
+        ASSERT_EQ(motion.size(), std::size_t(reports[k].iterations) + 1);
+        for (std::size_t j = 0; j < motion.size(); ++j) {
+            // Reported from the w-th iteration on, as a path length (>= 0).
+            if (j < w)
+                EXPECT_LT(motion[j], 0) << j;
+            else
+                EXPECT_GE(motion[j], 0) << j;
+        }
+        if (k == 1) {
+            EXPECT_EQ(reports[k].convergedBy, ConvergenceTest::SurfaceSettled);
+            EXPECT_LE(motion.back(), settled.surfaceTolerance);
+            for (std::size_t j = w; j + 1 < motion.size(); ++j)
+                EXPECT_GT(motion[j], settled.surfaceTolerance) << "iteration " << j;
+        } else {
+            EXPECT_NE(reports[k].convergedBy, ConvergenceTest::SurfaceSettled);
+        }
+    }
+    std::printf("[ surface test ] %d iterations (energy test: %d), E %.6e (%.6e), surface "
+                "%.3e h from the energy test's\n",
+                reports[1].iterations, reports[0].iterations, reports[1].energy, reports[0].energy,
+                SurfaceProbe<2>::meanDistance(surface[1], surface[0]) / h);
+    EXPECT_LT(2 * reports[1].iterations, reports[0].iterations);
+    EXPECT_LT(SurfaceProbe<2>::meanDistance(surface[1], surface[0]), 0.1 * h);
+    EXPECT_STREQ(toString(ConvergenceTest::SurfaceSettled), "surface settled");
+
+    DescentOptions invalid;
+    invalid.surfaceTolerance = -1;
+    EXPECT_THROW(invalid.validate(), openvdb::ValueError);
+    MultiscaleOptions m = MultiscaleOptions::defaults(2);
+    m.surfaceTolerance = std::numeric_limits<Real>::quiet_NaN();
+    EXPECT_THROW(m.validate(), openvdb::ValueError);
+}

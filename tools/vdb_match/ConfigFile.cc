@@ -39,6 +39,8 @@ configKeys()
         {"energyTolerance", "--energy-tolerance"},
         {"settleTolerance", "--settle-tolerance"},
         {"toleranceCoarsening", "--tolerance-coarsening"},
+        {"surfaceTolerance", "--surface-tolerance"},
+        {"surfaceLevels", "--surface-levels"},
         {"relativeGradientTolerance", "--gradient-tolerance"},
     };
     return keys;

@@ -63,6 +63,8 @@ struct MatchCliOptions
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
     double settleTolerance = MatchOptions::defaults(3).multiscale.descent.settleTolerance;
     double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
+    double surfaceTolerance = MatchOptions::defaults(3).multiscale.surfaceTolerance;
+    int surfaceLevels = MatchOptions::defaults(3).multiscale.surfaceLevels;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
@@ -215,8 +217,16 @@ matchOptionTable()
          "... or when its last 5 iterations lowered the energy by less than X times what the "
          "level has lowered it so far (default " + formatNumber(d.settleTolerance) + ": off)",
          [](O& o, const std::string& v) { o.settleTolerance = parseDouble("--settle-tolerance", v); }},
+        {"--surface-tolerance", "X", "Descent",
+         "... or, at the last --surface-levels levels, when the source surface moved by less than X "
+         "cells (path length of the mean over its vertices) over 5 iterations (default " + formatNumber(d.surfaceTolerance) +
+             (d.surfaceTolerance > 0 ? ")" : ": off)"),
+         [](O& o, const std::string& v) { o.surfaceTolerance = parseDouble("--surface-tolerance", v); }},
+        {"--surface-levels", "N", "Descent",
+         "the surface test applies at the last N levels only (default " + std::to_string(d.surfaceLevels) + ")",
+         [](O& o, const std::string& v) { o.surfaceLevels = parseInt("--surface-levels", v); }},
         {"--tolerance-coarsening", "F", "Descent",
-         "level l divides the energy and settle tolerances by F^(last level - l): coarse levels, "
+         "level l divides the energy, settle and surface tolerances by F^(last level - l): coarse levels, "
          "where iterations are cheap, converge further (default " + formatNumber(d.toleranceCoarsening) + ")",
          [](O& o, const std::string& v) { o.toleranceCoarsening = parseDouble("--tolerance-coarsening", v); }},
         {"--gradient-tolerance", "X", "Descent",
@@ -390,6 +400,10 @@ public:
         mErr << PROGRAM << ": level " << i.level << " it " << fixed("%4.0f", i.iteration) << "  E "
              << fixed("%.6e", i.energy) << " (" << termsText(i.terms) << ")  |g| "
              << fixed("%.2e", i.gradNorm) << "  step " << fixed("%.2e", i.step) << "  "
+             << (i.surfaceMotion >= 0
+                     ? "surface moved " + fixed("%.3g", std::ldexp(i.surfaceMotion, i.level)) +
+                           " h  "
+                     : std::string())
              << duration(secondsSince(mStart)) << timeLeft(i.level) << std::endl;
     }
 
@@ -569,6 +583,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"maxIterations", descent.maxIterations},
              {"energyTolerance", descent.energyTolerance},
              {"settleTolerance", descent.settleTolerance},
+             {"surfaceTolerance", opts.multiscale.surfaceTolerance},
+             {"surfaceLevels", opts.multiscale.surfaceLevels},
              {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
              {"relativeGradientTolerance", descent.relativeGradientTolerance}});
     Json levels = Json::array();
@@ -670,6 +686,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;
     opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
+    opts.multiscale.surfaceTolerance = o.surfaceTolerance;
+    opts.multiscale.surfaceLevels = o.surfaceLevels;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;

@@ -35,6 +35,13 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: toleranceCoarsening must be finite and >= 1, got "
                           << toleranceCoarsening);
+    if (!(surfaceTolerance >= 0) || !std::isfinite(surfaceTolerance))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: surfaceTolerance must be finite and >= 0, got "
+                          << surfaceTolerance);
+    if (surfaceLevels < 0)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: surfaceLevels must be >= 0, got " << surfaceLevels);
     if (!(metric.cgTolerance > 0 && metric.cgTolerance < 1))
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: the metric tolerance must be in (0, 1), got "
@@ -110,7 +117,19 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         const Real tighten = std::pow(mOpts.toleranceCoarsening, mOpts.maxLevel - l);
         levelDescent.settleTolerance /= tighten;
         levelDescent.energyTolerance /= tighten;
-        const solver::Descent<D> descent(energy, metric, levelDescent);
+        levelDescent.surfaceTolerance = l > mOpts.maxLevel - mOpts.surfaceLevels
+                                            ? mOpts.surfaceTolerance * in.lattice->h() / tighten
+                                            : 0.0;
+        solver::Descent<D> descent(energy, metric, levelDescent);
+        // phi at the surface points as a function of u on this level's lattice.
+        solver::SurfaceProbe<D> probe;
+        if (in.surfacePoints && !in.surfacePoints->empty()) {
+            const PiecewiseLinearInterpolator<D> locator(*in.lattice);
+            typename PiecewiseLinearInterpolator<D>::Location loc;
+            for (const Vec<D>& x : *in.surfacePoints)
+                if (locator.locate(x, loc)) probe.add(loc.nodes, loc.weights);
+        }
+        descent.setSurfaceProbe(&probe);
         const solver::Report report = descent.run(u, observer, threaded, interrupter);
 
         result.lattice = in.lattice;

@@ -39,6 +39,9 @@ template <int D> struct Level
     std::shared_ptr<const SimplexLattice<D>> lattice;
     std::shared_ptr<const FieldSampler<D>> shape1; ///< fields of M1 (source)
     std::shared_ptr<const FieldSampler<D>> shape2; ///< fields of M2 (target)
+    /// Points of M1 (Omega units) watched by the surface test (MultiscaleOptions::
+    /// surfaceTolerance); null or empty: the test is off at this level. Must outlive run().
+    const std::vector<Vec<D>>* surfacePoints = nullptr;
 };
 
 /// Builds the inputs of level l (called once per level, in increasing order, on the calling
@@ -82,6 +85,15 @@ struct MultiscaleOptions
     /// levels, where iterations are cheap, converge further than the finest one (>= 1; 1: the
     /// same everywhere).
     Real toleranceCoarsening = 1;
+    /// Surface test (DescentOptions::surfaceTolerance), in cells, at the last surfaceLevels
+    /// levels: level l ends when phi on Level::surfacePoints moved by less than
+    /// surfaceTolerance * h_l / toleranceCoarsening^(maxLevel - l) (path length of the mean
+    /// motion over the last energyWindow iterations; 0: off). descent.surfaceTolerance is
+    /// ignored: the driver sets it per level.
+    Real surfaceTolerance = 0;
+    /// Number of finest levels at which the surface test applies (>= 0). The coarse levels set
+    /// the correspondence through slow tangential motion and must run to the energy test.
+    int surfaceLevels = 1;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
     static MultiscaleOptions defaults(int dim);

@@ -39,6 +39,8 @@ toString(ConvergenceTest test)
         return "energy decrease";
     case ConvergenceTest::Settled:
         return "settled";
+    case ConvergenceTest::SurfaceSettled:
+        return "surface settled";
     }
     return "unknown";
 }
@@ -73,6 +75,8 @@ DescentOptions::validate() const
         fail("energyTolerance must be finite and >= 0");
     if (!(settleTolerance >= 0) || !std::isfinite(settleTolerance))
         fail("settleTolerance must be finite and >= 0");
+    if (!(surfaceTolerance >= 0) || !std::isfinite(surfaceTolerance))
+        fail("surfaceTolerance must be finite and >= 0");
     if (energyWindow < 0) fail("energyWindow must be >= 0");
     if (restartInterval < 0) fail("restartInterval must be >= 0");
     if (lbfgsMemory < 1) fail("lbfgsMemory must be >= 1");
@@ -158,6 +162,16 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     const Real gradLimit =
         std::max(mOpts.gradientTolerance, mOpts.relativeGradientTolerance * report.initialGradNorm);
 
+    // The path length of phi on the probe's points over the last w iterations, for the surface
+    // test: sum_j mean_x |phi_j(x) - phi_{j-1}(x)|. A path length, unlike the net motion over
+    // the window, does not dip when the surface moves back and forth.
+    const std::size_t window = std::size_t(mOpts.energyWindow);
+    const bool probing = mProbe && !mProbe->empty() && window > 0;
+    NodeVectors<D> surface, surfaceNew;
+    std::vector<Real> surfaceSteps;
+    if (probing) mProbe->displacements(u, surface);
+    Real surfaceMotion = -1;
+
     auto notify = [&](int iteration, Real step, Real maxDisplacement, bool restarted) {
         if (!observer) return;
         IterationInfo info;
@@ -168,6 +182,7 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         info.gradNorm = report.gradNorm;
         info.step = step;
         info.maxDisplacement = maxDisplacement;
+        info.surfaceMotion = surfaceMotion;
         info.energyEvaluations = report.energyEvaluations + report.gradientEvaluations;
         info.restarted = restarted;
         info.elapsedSeconds = elapsed();
@@ -318,6 +333,16 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
             const Real cap = pMax > 0 ? mOpts.maxTrialDisplacementCells * h / pMax : 1.0;
             lineSearch.setInitialStep(std::min(Real(1), cap));
         }
+        if (probing) {
+            mProbe->displacements(u, surfaceNew);
+            surfaceSteps.push_back(SurfaceProbe<D>::meanDistance(surfaceNew, surface));
+            surface.swap(surfaceNew);
+            if (surfaceSteps.size() >= window) {
+                surfaceMotion = 0;
+                for (std::size_t j = surfaceSteps.size() - window; j < surfaceSteps.size(); ++j)
+                    surfaceMotion += surfaceSteps[j];
+            }
+        }
         notify(report.iterations, ls.step, maxDisplacement, movedSteepest);
 
         history.push_back(E);
@@ -332,6 +357,11 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
                 report.convergedBy = ConvergenceTest::Settled;
                 return finish(Status::Converged);
             }
+        }
+        if (mOpts.surfaceTolerance > 0 && surfaceMotion >= 0 &&
+            surfaceMotion <= mOpts.surfaceTolerance) {
+            report.convergedBy = ConvergenceTest::SurfaceSettled;
+            return finish(Status::Converged);
         }
     }
 }

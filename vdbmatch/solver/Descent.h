@@ -37,6 +37,10 @@
 /// 6. settled: E_{k-w} - E_k <= settleTolerance * (E_0 - E_k), E_0 the energy at the start of
 ///    the run: the last w iterations gained less than a fraction of what the run has gained so
 ///    far                                                                -> Converged
+/// 7. surface settled (with a SurfaceProbe): sum_{j=k-w+1..k} mean_x |phi_j(x) - phi_{j-1}(x)|
+///    <= surfaceTolerance over the probe's points x on M1: the map on the source surface
+///    stopped moving (a path length, so that a back-and-forth motion does not pass)
+///                                                                       -> Converged
 /// Test 6 is invariant under adding a constant to E or scaling it; test 5 subtracts the one
 /// constant the energies have (c_vol sigma^theta W_vol(1)|Omega| of the directional energy,
 /// 63-87% of it at levels 6-7 on the starfish pair), so with either test the symmetric and the
@@ -56,6 +60,7 @@
 #include <vdbmatch/energy/Energy.h>
 #include <vdbmatch/solver/ArmijoLineSearch.h>
 #include <vdbmatch/solver/H1Metric.h>
+#include <vdbmatch/solver/SurfaceProbe.h>
 
 #include <openvdb/util/NullInterrupter.h>
 
@@ -76,7 +81,7 @@ enum class Status {
 const char* toString(Status status);
 
 /// Which test declared convergence.
-enum class ConvergenceTest { None, GradientNorm, EnergyDecrease, Settled };
+enum class ConvergenceTest { None, GradientNorm, EnergyDecrease, Settled, SurfaceSettled };
 const char* toString(ConvergenceTest test);
 
 /// Result of a descent at one level, modelled on openvdb::math::pcg::State.
@@ -109,9 +114,13 @@ struct IterationInfo
     int iteration = 0;
     Real energy = INF;
     EnergyTerms terms;
-    Real gradNorm = 0;                 ///< ||g||_{G^{-1}}
-    Real step = 0;                     ///< accepted line-search step t
-    Real maxDisplacement = 0;          ///< max_i |t p_i|, Omega units
+    Real gradNorm = 0;        ///< ||g||_{G^{-1}}
+    Real step = 0;            ///< accepted line-search step t
+    Real maxDisplacement = 0; ///< max_i |t p_i|, Omega units
+    /// Path length of phi on the SurfaceProbe's points over the last w iterations,
+    /// sum_j mean_x |phi_j(x) - phi_{j-1}(x)|, Omega units; negative when there is no probe or
+    /// fewer than w iterations were done.
+    Real surfaceMotion = -1;
     std::size_t energyEvaluations = 0; ///< so far at this level (value and value-and-gradient)
     bool restarted = false;            ///< this iteration moved along -r (steepest descent)
     Real elapsedSeconds = 0;           ///< since the start of the level
@@ -142,7 +151,11 @@ struct DescentOptions
     Real energyTolerance = 1e-5;
     /// Converged when E_{k-w} - E_k <= settleTolerance * (E_0 - E_k) (0 disables).
     Real settleTolerance = 0;
-    /// Window w of the energy tests (0 disables both).
+    /// Converged when phi on the SurfaceProbe's points moved by less than this (path length of
+    /// the mean distance, Omega units) over the last energyWindow iterations (0 or no probe:
+    /// disabled).
+    Real surfaceTolerance = 0;
+    /// Window w of the energy and surface tests (0 disables them).
     int energyWindow = 5;
     DescentMethod method = DescentMethod::NonlinearCG;
     ConjugateGradientUpdate update = ConjugateGradientUpdate::PolakRibierePlus;
@@ -174,6 +187,10 @@ public:
 
     const DescentOptions& options() const { return mOpts; }
 
+    /// Points of M1 whose motion the surface test (DescentOptions::surfaceTolerance) and
+    /// IterationInfo::surfaceMotion watch; null: none. Must outlive run().
+    void setSurfaceProbe(const SurfaceProbe<D>* probe) { mProbe = probe; }
+
     /// Minimises E from the initial guess @a u (D x nodeCount, Omega units; projected first:
     /// Dirichlet columns set to 0, hanging columns interpolated, H1Metric::project), leaving the
     /// result in @a u. The unknowns are the free nodes; u stays continuous (P u form).
@@ -189,6 +206,7 @@ private:
     const Energy<D>* mEnergy;
     const H1Metric<D>* mMetric;
     DescentOptions mOpts;
+    const SurfaceProbe<D>* mProbe = nullptr;
 };
 
 extern template class Descent<2>;
