@@ -104,6 +104,9 @@ MatchOptions::defaults(int dim)
     opts.multiscale.descent.energyTolerance = DEFAULT_MATCH_ENERGY_TOLERANCE;
     opts.multiscale.descent.settleTolerance = DEFAULT_MATCH_SETTLE_TOLERANCE;
     opts.multiscale.toleranceCoarsening = DEFAULT_MATCH_TOLERANCE_COARSENING;
+    opts.multiscale.surfaceTolerance =
+        dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
+    opts.multiscale.surfaceLevels = DEFAULT_MATCH_SURFACE_LEVELS;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
     return opts;

@@ -55,12 +55,22 @@ namespace vdbmatch {
 /// stops at the same convergence as the symmetric one; MultiscaleOptions::toleranceCoarsening
 /// makes the coarse levels, where iterations are cheap, converge further). Measured on the
 /// accuracy benchmark (docs/performance.md): closer to the true correspondence than the former
-/// default (1e-3 at every level, constant included). The settle test
+/// default (1e-3 at every level, constant included). In 3D the finest level also ends by the
+/// surface test (DEFAULT_MATCH_SURFACE_TOLERANCE_3D). The settle test
 /// (DescentOptions::settleTolerance, --settle-tolerance) stops much earlier and is off: on the
 /// benchmark it lost accuracy on 5 of 6 pairs.
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
+/// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
+/// level: it ends when the source surface moved by less than 0.02 h over 5 iterations (path
+/// length of the mean over M1's vertices). In 3D, where the default levels are 4..8, the finest
+/// level then takes 8 iterations instead of 84 on the starfish pair (whole match 0.54x) and the
+/// accuracy benchmark at 4..8 is unchanged within 1% (docs/performance.md). In 2D (4..9) it cost
+/// 15% correspondence error on one pair, so it is off there.
+constexpr double DEFAULT_MATCH_SURFACE_TOLERANCE_3D = 0.02;
+constexpr double DEFAULT_MATCH_SURFACE_TOLERANCE_2D = 0;
+constexpr int DEFAULT_MATCH_SURFACE_LEVELS = 1;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not
 /// be exact (12 instead of 31 CG iterations per solve at level 7, same residual and energy).
 constexpr double DEFAULT_MATCH_METRIC_TOLERANCE = 1e-2;

@@ -63,7 +63,7 @@ struct MatchCliOptions
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
     double settleTolerance = MatchOptions::defaults(3).multiscale.descent.settleTolerance;
     double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
-    double surfaceTolerance = MatchOptions::defaults(3).multiscale.surfaceTolerance;
+    std::optional<double> surfaceTolerance; ///< default per dimension (MatchOptions::defaults)
     int surfaceLevels = MatchOptions::defaults(3).multiscale.surfaceLevels;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
@@ -219,8 +219,9 @@ matchOptionTable()
          [](O& o, const std::string& v) { o.settleTolerance = parseDouble("--settle-tolerance", v); }},
         {"--surface-tolerance", "X", "Descent",
          "... or, at the last --surface-levels levels, when the source surface moved by less than X "
-         "cells (path length of the mean over its vertices) over 5 iterations (default " + formatNumber(d.surfaceTolerance) +
-             (d.surfaceTolerance > 0 ? ")" : ": off)"),
+         "cells (path length of the mean over its vertices) over 5 iterations (default " +
+             both(MatchOptions::defaults(3).multiscale.surfaceTolerance,
+                  MatchOptions::defaults(2).multiscale.surfaceTolerance) + "; 0: off)",
          [](O& o, const std::string& v) { o.surfaceTolerance = parseDouble("--surface-tolerance", v); }},
         {"--surface-levels", "N", "Descent",
          "the surface test applies at the last N levels only (default " + std::to_string(d.surfaceLevels) + ")",
@@ -686,7 +687,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;
     opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
-    opts.multiscale.surfaceTolerance = o.surfaceTolerance;
+    if (o.surfaceTolerance) opts.multiscale.surfaceTolerance = *o.surfaceTolerance;
     opts.multiscale.surfaceLevels = o.surfaceLevels;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
