@@ -125,6 +125,17 @@ checkMatch(const Surface<D>& source, const Surface<D>& target, const MatchOption
     for (const LevelSummary& l : result.levels) {
         EXPECT_GT(l.report.terms.bandSimplices, 0u) << "level " << l.level;
         EXPECT_EQ(l.report.terms.coarseBandSimplices, 0u) << "level " << l.level;
+        // The surface test (default in 3D) may end only the last surfaceLevels levels.
+        const bool surfaceLevel =
+            l.level > opts.multiscale.maxLevel - opts.multiscale.surfaceLevels &&
+            opts.multiscale.surfaceTolerance > 0;
+        std::printf("[ level %d ] %s (%s) after %d iterations\n", l.level,
+                    solver::toString(l.report.status), solver::toString(l.report.convergedBy),
+                    l.report.iterations);
+        if (!surfaceLevel) {
+            EXPECT_NE(l.report.convergedBy, solver::ConvergenceTest::SurfaceSettled)
+                << "level " << l.level;
+        }
     }
 
     // The deformed source is phi applied to the source vertices, in world space.
@@ -184,6 +195,9 @@ TEST(Match, SphereToEllipsoid3D)
     MatchOptions opts = MatchOptions::defaults(3);
     opts.multiscale.minLevel = 3;
     opts.multiscale.maxLevel = 5;
+    EXPECT_EQ(opts.multiscale.surfaceTolerance, DEFAULT_MATCH_SURFACE_TOLERANCE_3D);
+    EXPECT_EQ(MatchOptions::defaults(2).multiscale.surfaceTolerance,
+              DEFAULT_MATCH_SURFACE_TOLERANCE_2D);
     checkMatch<3>(sphere, ellipsoid, opts);
 }
 
