@@ -238,3 +238,31 @@ TEST(Match, LipschitzBoundIsTheLargestSingularValue)
     const Eigen::JacobiSVD<Mat<3>> svd(A);
     EXPECT_NEAR(lipschitzBound<3>(lattice, u), svd.singularValues()[0], 1e-10);
 }
+
+TEST(Match, ThreadCountIndependence3D)
+{
+    // The default 3D match (the surface test ends the finest level) gives bitwise the same
+    // displacement, iterations and stopping tests on one thread as on several.
+    const Surface<3> sphere = ellipsoidMesh(Vec<3>(0, 0, 0), Vec<3>(1, 1, 1), 24, 48);
+    const Surface<3> ellipsoid =
+        ellipsoidMesh(Vec<3>(0.25, 0.1, -0.1), Vec<3>(1.3, 0.95, 0.8), 24, 48);
+    MatchOptions opts = MatchOptions::defaults(3);
+    const UnitBoxPlacement placement = placeInUnitBox(sphere, ellipsoid, opts.margin);
+    opts.multiscale.minLevel = 3;
+    opts.multiscale.maxLevel = 4;
+    MatchResult<3> results[2];
+    for (int k = 0; k < 2; ++k) {
+        opts.threaded = k == 1;
+        results[k] = match<3>(sphere, ellipsoid, placement, opts);
+        ASSERT_TRUE(results[k].isComplete());
+    }
+    ASSERT_EQ(results[0].levels.size(), results[1].levels.size());
+    for (std::size_t i = 0; i < results[0].levels.size(); ++i) {
+        EXPECT_EQ(results[0].levels[i].report.iterations, results[1].levels[i].report.iterations);
+        EXPECT_EQ(results[0].levels[i].report.convergedBy, results[1].levels[i].report.convergedBy);
+        EXPECT_EQ(results[0].levels[i].report.energy, results[1].levels[i].report.energy);
+    }
+    EXPECT_EQ(results[0].levels.back().report.convergedBy, solver::ConvergenceTest::SurfaceSettled);
+    ASSERT_EQ(results[0].displacement.cols(), results[1].displacement.cols());
+    EXPECT_TRUE((results[0].displacement.array() == results[1].displacement.array()).all());
+}

@@ -360,15 +360,19 @@ termsText(const EnergyTerms& t)
 
 /// Progress on stderr with an estimate of the time left: a level is assumed to cost the time
 /// of the previous one times the ratio of their unknowns, and each later level 2^(d-1) times
-/// the one before (the fine cells follow the surfaces).
+/// the one before (the fine cells follow the surfaces). A level that the surface test ends
+/// (the finest, in 3D) is assumed to take SURFACE_LEVEL_ITERATIONS iterations instead
+/// (5-12 measured, docs/performance.md).
 class ProgressPrinter
 {
 public:
-    ProgressPrinter(std::ostream& err, const MatchCliOptions& o, int dim, int minLevel,
-                    int maxLevel)
-        : mErr(err), mO(o), mDim(dim), mMaxLevel(maxLevel)
+    static constexpr double SURFACE_LEVEL_ITERATIONS = 12;
+
+    /// @param firstSurfaceLevel  the first level the surface test may end (> maxLevel: none)
+    ProgressPrinter(std::ostream& err, const MatchCliOptions& o, int dim, int maxLevel,
+                    int firstSurfaceLevel)
+        : mErr(err), mO(o), mDim(dim), mMaxLevel(maxLevel), mFirstSurfaceLevel(firstSurfaceLevel)
     {
-        (void)minLevel;
     }
 
     void message(const std::string& text)
@@ -379,7 +383,11 @@ public:
     void levelStart(int level, const LatticeSummary& s, double fieldSeconds, double latticeSeconds)
     {
         if (mLastLevelSeconds > 0 && mLastUnknowns > 0) {
-            mLevelEstimate = mLastLevelSeconds * double(s.unknowns) / double(mLastUnknowns);
+            const double ratio = double(s.unknowns) / double(mLastUnknowns);
+            mFullLevel = mLastLevelSeconds * ratio;
+            mIteration = mLastIterationSeconds * ratio;
+            mLevelEstimate =
+                level >= mFirstSurfaceLevel ? SURFACE_LEVEL_ITERATIONS * mIteration : mFullLevel;
         } else {
             mLevelEstimate = -1;
         }
@@ -411,6 +419,7 @@ public:
     void levelEnd(const LevelSummary& s)
     {
         mLastLevelSeconds = s.report.elapsedSeconds + mLevelPrep;
+        mLastIterationSeconds = s.report.elapsedSeconds / std::max(1, s.report.iterations);
         const solver::Report& r = s.report;
         std::string how = solver::toString(r.status);
         if (r.status == solver::Status::Converged) {
@@ -428,19 +437,22 @@ private:
         if (mLevelEstimate <= 0) return "";
         const double growth = std::pow(2.0, mDim - 1);
         double left = std::max(0.0, mLevelEstimate - secondsSince(mLevelStart));
-        double next = mLevelEstimate;
+        double full = mFullLevel, iteration = mIteration, prep = mLevelPrep;
         for (int l = level + 1; l <= mMaxLevel; ++l) {
-            next *= growth;
-            left += next;
+            full *= growth;
+            iteration *= growth;
+            prep *= growth;
+            left += l >= mFirstSurfaceLevel ? prep + SURFACE_LEVEL_ITERATIONS * iteration : full;
         }
         return "  left ~" + duration(left);
     }
 
     std::ostream& mErr;
     const MatchCliOptions& mO;
-    int mDim, mMaxLevel;
+    int mDim, mMaxLevel, mFirstSurfaceLevel;
     Clock::time_point mStart = Clock::now(), mLevelStart = Clock::now();
     double mLevelEstimate = -1, mLastLevelSeconds = 0, mLevelPrep = 0;
+    double mLastIterationSeconds = 0, mFullLevel = 0, mIteration = 0;
     std::size_t mLastUnknowns = 0;
 };
 
@@ -742,7 +754,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 
-    ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel);
+    const int firstSurfaceLevel = opts.multiscale.surfaceTolerance > 0
+                                      ? opts.multiscale.maxLevel - opts.multiscale.surfaceLevels + 1
+                                      : opts.multiscale.maxLevel + 1;
+    ProgressPrinter progress(err, o, D, opts.multiscale.maxLevel, firstSurfaceLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
                      "D, " + toString(opts.multiscale.kind) + " energy, levels " +
                      std::to_string(opts.multiscale.minLevel) + ".." +
