@@ -143,6 +143,22 @@ if grep -q '"cMatch": 3' "$SCRATCH/m3o/report.json" && grep -q '"maxLevel": 3' "
 else
     fail "config-command-line-wins"
 fi
+# A report.json of a version before the surface test (no surfaceTolerance) reproduces its run
+# with the test off, whatever today's default.
+"$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+for k in ("surfaceTolerance", "surfaceLevels"):
+    r["parameters"].pop(k, None)
+json.dump(r, open(sys.argv[2], "w"))
+PY
+check config-old-report 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old" --config "$SCRATCH/old_report.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
+    echo "ok   config-old-report-surface-off"
+else
+    fail "config-old-report-surface-off"
+fi
 check config-unknown-key 3 '' "unknown key 'levelz'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/typo.json" --quiet
 check config-bad-value 1 '' "key 'cMatch': --c-match expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/badvalue.json" --quiet
 check config-not-object 3 '' 'not a JSON object' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/array.json" --quiet

@@ -91,6 +91,12 @@ parseConfig(const std::string& text, const std::string& path)
         settings.push_back(
             {key, option, value.is_string() ? value.get<std::string>() : value.dump()});
     }
+    // A report.json of a version before the surface test (its parameters have the stopping rule
+    // but no surfaceTolerance) ran without it: reproduce that run, not today's default.
+    if (doc.contains("parameters") && params.contains("energyTolerance") &&
+        !params.contains("surfaceTolerance")) {
+        settings.push_back({"surfaceTolerance", "--surface-tolerance", "0"});
+    }
     return settings;
 }
 
