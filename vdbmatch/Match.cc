@@ -300,9 +300,9 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             const NodeVectors<D>* uPrev = context.previousDisplacement;
             // A point x needs cells of side h if |d1(x)| < reach1 or |d2(phi_{l-1}(x))| <
             // reach2.
-            auto pointNeedsFine = [&](const Vec<D>& x) {
-                Real d;
-                if (!d1.sampleDistance(x, d) || std::abs(d) < reach1) return true;
+            // phi_{l-1}(x): the previous level's result, or the initial deformation at the
+            // first level (the identity without one).
+            auto previousPhi = [&](const Vec<D>& x) {
                 Vec<D> y = x;
                 if (previous) {
                     Vec<D> du;
@@ -312,7 +312,12 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                     for (int a = 0; a < D; ++a)
                         y[a] += du[a];
                 }
-                return !d2.sampleDistance(y, d) || std::abs(d) < reach2;
+                return y;
+            };
+            auto pointNeedsFine = [&](const Vec<D>& x) {
+                Real d;
+                if (!d1.sampleDistance(x, d) || std::abs(d) < reach1) return true;
+                return !d2.sampleDistance(previousPhi(x), d) || std::abs(d) < reach2;
             };
             const RefinementPredicate<D> needsFine = [&](const Vec<D>& c, Real radius) {
                 // Conservative test on the circumscribed ball (1-Lipschitz d1 and d2, phi
@@ -322,15 +327,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 bool near =
                     !d1.sampleDistance(c, d) || std::abs(d) < reach1 + radius + tierSlack(d1, c);
                 if (!near) {
-                    Vec<D> y = c;
-                    if (previous) {
-                        Vec<D> du;
-                        if (previous->evaluate(*uPrev, c, du)) y += du;
-                    } else if (initial) {
-                        const openvdb::Vec3d du = initial->displacement(toPoint3<D>(c));
-                        for (int a = 0; a < D; ++a)
-                            y[a] += du[a];
-                    }
+                    const Vec<D> y = previousPhi(c);
                     near = !d2.sampleDistance(y, d) ||
                            std::abs(d) < reach2 + lipschitz * radius + tierSlack(d2, y);
                 }

@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <limits>
 #include <sstream>
 
@@ -15,6 +16,18 @@ namespace vdbmatch {
 namespace cli {
 
 const char* const PROGRAM = "vdb_match";
+
+void
+createOutputDirectory(const std::string& dir)
+{
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (!std::filesystem::is_directory(dir)) {
+        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
+                                            << dir << "'"
+                                            << (ec ? ": " + ec.message() : std::string()));
+    }
+}
 
 std::string
 commandLine(int argc, const char* const* argv)

@@ -132,6 +132,11 @@ void checkIsoValueInputs(const std::optional<double>& isoValue, const std::strin
 /// The command line as typed: argv joined by spaces.
 std::string commandLine(int argc, const char* const* argv);
 
+/// Creates the output directory @a dir (and its parents) if it does not exist.
+/// @throw openvdb::IoError "cannot create the output directory 'DIR': REASON" if it is not a
+///        directory afterwards
+void createOutputDirectory(const std::string& dir);
+
 /// Parses a finite number / an integer for option @a option.
 /// @throw UsageError if @a text is not one
 double parseDouble(const std::string& option, const std::string& text);

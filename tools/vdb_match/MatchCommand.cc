@@ -744,13 +744,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
 
     // The output directory must be usable before hours of work.
     namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::create_directories(o.outDir, ec);
-    if (!fs::is_directory(o.outDir)) {
-        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
-                                            << o.outDir << "'"
-                                            << (ec ? ": " + ec.message() : std::string()));
-    }
+    createOutputDirectory(o.outDir);
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 

@@ -263,13 +263,7 @@ runTexture(const TextureCliOptions& o, std::ostream& out, std::ostream& err)
     if (psi) requireDim(psi->dimension(), "the inverse '" + o.inverse + "'");
 
     namespace fs = std::filesystem;
-    std::error_code ec;
-    fs::create_directories(o.outDir, ec);
-    if (!fs::is_directory(o.outDir)) {
-        OPENVDB_THROW(openvdb::IoError, "cannot create the output directory '"
-                                            << o.outDir << "'"
-                                            << (ec ? ": " + ec.message() : std::string()));
-    }
+    createOutputDirectory(o.outDir);
     auto path = [&](const std::string& name) { return (fs::path(o.outDir) / name).string(); };
     std::vector<std::string> written;
     auto wrote = [&](const std::string& name) { written.push_back(path(name)); };
