@@ -251,6 +251,41 @@ TEST_F(DistanceFieldTest, SamplerCoversTheBoxIn2D)
     }
 }
 
+TEST_F(DistanceFieldTest, SamplerCacheGivesTheSameSamplerAtEveryLevel)
+{
+    // Levels 3..7 with the dense level 3 in 2D: the box tier at 3 serves every level, the band
+    // at l - 2 is the finest tier of level l - 2. Each cached sampler must equal a fresh one bit
+    // for bit.
+    ShapeSamplerOptions opts;
+    opts.denseLevel2D = 3;
+    const Surface<2> shape = circle2();
+    ShapeSamplerCache<2> cache;
+    for (int level = 3; level <= 7; ++level) {
+        const auto cached = buildShapeSampler<2>(shape, level, opts, cache);
+        const auto fresh = buildShapeSampler<2>(shape, level, opts);
+        ASSERT_EQ(cached->tierCount(), fresh->tierCount()) << level;
+        for (size_t t = 0; t < fresh->tierCount(); ++t) {
+            EXPECT_EQ(cached->voxelSize(t), fresh->voxelSize(t));
+            EXPECT_EQ(cached->blockCount(t), fresh->blockCount(t));
+        }
+        for (int j = 0; j < 67; ++j)
+            for (int i = 0; i < 67; ++i) {
+                const Vec<2> x = Vec<2>(-0.05, -0.05) + (1.1 / 66) * Vec<2>(i, j);
+                RawFields<2> a{}, b{};
+                RawFieldDerivatives<2> da{}, db{};
+                ASSERT_TRUE(cached->sample(x, a, &da)) << x.transpose();
+                ASSERT_TRUE(fresh->sample(x, b, &db));
+                EXPECT_EQ(a.d, b.d);
+                EXPECT_EQ(a.n, b.n);
+                EXPECT_EQ(a.R, b.R);
+                EXPECT_EQ(da.dd, db.dd);
+            }
+    }
+    // Used with another surface, the cache refuses instead of mixing shapes.
+    const Surface<2> other = circle(CENTRE2, 0.2, 256);
+    EXPECT_THROW(buildShapeSampler<2>(other, 5, opts, cache), openvdb::ValueError);
+}
+
 TEST_F(DistanceFieldTest, LevelSetFromSurface)
 {
     // 3D: a sphere of radius 3 around (1, 2, 3) in a transform with voxel 0.25 and an offset.

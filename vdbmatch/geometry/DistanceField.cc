@@ -492,7 +492,8 @@ distanceBox<2>(const Surface<2>& surface, int level, int padding, bool threaded)
 
 template <int D>
 typename FieldSampler<D>::ConstPtr
-buildShapeSampler(const Surface<D>& surface, int level, const ShapeSamplerOptions& opts)
+buildShapeSampler(const Surface<D>& surface, int level, const ShapeSamplerOptions& opts,
+                  ShapeSamplerCache<D>& cache)
 {
     const int dense = D == 3 ? opts.denseLevel3D : opts.denseLevel2D;
     if (dense < MIN_DISTANCE_LEVEL) {
@@ -500,20 +501,43 @@ buildShapeSampler(const Surface<D>& surface, int level, const ShapeSamplerOption
                                                std::to_string(MIN_DISTANCE_LEVEL));
     }
     validate("buildShapeSampler", level, opts.bandHalfWidthVoxels);
-    std::vector<openvdb::FloatGrid::ConstPtr> tiers;
-    // At or below the dense level the box tier alone is as fine as a band would be.
-    if (level > dense) {
-        tiers.push_back(distanceBand<D>(surface, level, opts.bandHalfWidthVoxels, opts.threaded));
-        if (level - 2 > dense) {
-            tiers.push_back(
-                distanceBand<D>(surface, level - 2, opts.bandHalfWidthVoxels, opts.threaded));
-        }
+    if (cache.owner && cache.owner != &surface) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "buildShapeSampler: the cache holds the tiers of another surface");
     }
-    tiers.push_back(
-        distanceBox<D>(surface, std::min(level, dense), SAMPLER_BOX_PADDING, opts.threaded));
+    cache.owner = &surface;
+    cache.dropBelow(level);
     ShapeFieldOptions fields = opts.fields;
     fields.threaded = fields.threaded && opts.threaded;
-    return std::make_shared<const FieldSampler<D>>(tiers, fields);
+    // One sampler per tier, so that later levels can share it.
+    auto single = [&](openvdb::FloatGrid::ConstPtr grid) {
+        return std::make_shared<const FieldSampler<D>>(
+            std::vector<openvdb::FloatGrid::ConstPtr>{grid}, fields);
+    };
+    auto band = [&](int l) {
+        return cache.tier('b', l, [&] {
+            return single(distanceBand<D>(surface, l, opts.bandHalfWidthVoxels, opts.threaded));
+        });
+    };
+    std::vector<typename FieldSampler<D>::ConstPtr> tiers;
+    // At or below the dense level the box tier alone is as fine as a band would be.
+    if (level > dense) {
+        tiers.push_back(band(level));
+        if (level - 2 > dense) tiers.push_back(band(level - 2));
+    }
+    const int boxLevel = std::min(level, dense);
+    tiers.push_back(cache.tier('x', boxLevel, [&] {
+        return single(distanceBox<D>(surface, boxLevel, SAMPLER_BOX_PADDING, opts.threaded));
+    }));
+    return std::make_shared<const FieldSampler<D>>(tiers);
+}
+
+template <int D>
+typename FieldSampler<D>::ConstPtr
+buildShapeSampler(const Surface<D>& surface, int level, const ShapeSamplerOptions& opts)
+{
+    ShapeSamplerCache<D> cache;
+    return buildShapeSampler(surface, level, opts, cache);
 }
 
 template <>
@@ -571,5 +595,9 @@ template FieldSampler<2>::ConstPtr buildShapeSampler<2>(const Surface<2>&, int,
                                                         const ShapeSamplerOptions&);
 template FieldSampler<3>::ConstPtr buildShapeSampler<3>(const Surface<3>&, int,
                                                         const ShapeSamplerOptions&);
+template FieldSampler<2>::ConstPtr
+buildShapeSampler<2>(const Surface<2>&, int, const ShapeSamplerOptions&, ShapeSamplerCache<2>&);
+template FieldSampler<3>::ConstPtr
+buildShapeSampler<3>(const Surface<3>&, int, const ShapeSamplerOptions&, ShapeSamplerCache<3>&);
 
 } // namespace vdbmatch

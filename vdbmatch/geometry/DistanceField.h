@@ -34,6 +34,9 @@
 
 #include <openvdb/openvdb.h>
 
+#include <map>
+#include <utility>
+
 namespace vdbmatch {
 
 /// Levels accepted by the distance functions (h = 2^-level), as SimplexLattice.
@@ -95,6 +98,43 @@ template <int D>
 typename FieldSampler<D>::ConstPtr
 buildShapeSampler(const Surface<D>& surface, int level,
                   const ShapeSamplerOptions& opts = ShapeSamplerOptions());
+
+/// The tiers buildShapeSampler() built for one shape, kept for its next levels: above the dense
+/// level the box tier is the same at every level, and the band two levels down was the finest
+/// tier two levels before. Band tiers more than two levels below the last request are dropped.
+/// Not thread-safe: one cache per shape.
+template <int D> class ShapeSamplerCache
+{
+public:
+    /// Tiers of @a kind ('b' band, 'x' box) at @a level, built by @a build on the first request.
+    template <typename Build>
+    typename FieldSampler<D>::ConstPtr tier(char kind, int level, Build&& build)
+    {
+        const auto key = std::make_pair(kind, level);
+        auto it = mTiers.find(key);
+        if (it == mTiers.end()) it = mTiers.emplace(key, build()).first;
+        return it->second;
+    }
+    /// Forgets the band tiers below @a level - 2.
+    void dropBelow(int level)
+    {
+        for (auto it = mTiers.begin(); it != mTiers.end();)
+            it = it->first.first == 'b' && it->first.second < level - 2 ? mTiers.erase(it) : ++it;
+    }
+    /// The surface and options the tiers were built for (set by the first use).
+    const void* owner = nullptr;
+
+private:
+    std::map<std::pair<char, int>, typename FieldSampler<D>::ConstPtr> mTiers;
+};
+
+/// As above, reusing (and filling) @a cache, which must only ever be used with this @a surface
+/// and @a opts. Bitwise the same sampler as without the cache.
+/// @throw openvdb::ValueError as above, or if @a cache was used with another surface
+template <int D>
+typename FieldSampler<D>::ConstPtr buildShapeSampler(const Surface<D>& surface, int level,
+                                                     const ShapeSamplerOptions& opts,
+                                                     ShapeSamplerCache<D>& cache);
 
 /// Level set of a surface for output (e.g. the deformed shape) in a given transform.
 /// - 3D: the 3D method above in the index space of @a xform (linear, uniform voxels).

@@ -161,18 +161,40 @@ FieldSampler<D>::FieldSampler(const std::vector<const ShapeFields<D>*>& tiersFin
 }
 
 template <int D>
+FieldSampler<D>::FieldSampler(const std::vector<ConstPtr>& samplersFinestFirst)
+{
+    for (size_t i = 0; i < samplersFinestFirst.size(); ++i) {
+        if (!samplersFinestFirst[i]) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "FieldSampler: sampler " + std::to_string(i) + " is null");
+        }
+        for (const auto& tier : samplersFinestFirst[i]->mTiers) {
+            checkOrder(tier->h);
+            mTiers.push_back(tier);
+        }
+    }
+}
+
+template <int D>
+void
+FieldSampler<D>::checkOrder(Real h) const
+{
+    if (!mTiers.empty() && h < mTiers.back()->h) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "FieldSampler: tiers must be ordered finest first, but tier " +
+                          std::to_string(mTiers.size()) + " has voxel size " + std::to_string(h) +
+                          " < " + std::to_string(mTiers.back()->h));
+    }
+}
+
+template <int D>
 void
 FieldSampler<D>::addTier(const ShapeFields<D>& fields, bool threaded)
 {
     constexpr int NC = NUM_COMPONENTS;
     constexpr int LOG2 = ShapeFields<D>::BLOCK_LOG2DIM;
     const Real h = fields.voxelSize();
-    if (!mTiers.empty() && h < mTiers.back().h) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "FieldSampler: tiers must be ordered finest first, but tier " +
-                          std::to_string(mTiers.size()) + " has voxel size " + std::to_string(h) +
-                          " < " + std::to_string(mTiers.back().h));
-    }
+    checkOrder(h);
     const size_t candidates = fields.blockCount();
     auto apronCoord = [&](int a) {
         return Coord(a % APRON_DIM, (a / APRON_DIM) % APRON_DIM,
@@ -240,7 +262,7 @@ FieldSampler<D>::addTier(const ShapeFields<D>& fields, bool threaded)
                 out[a * NC + c] = v ? v[c] : NOT_A_FIELD;
         }
     });
-    mTiers.push_back(std::move(tier));
+    mTiers.push_back(std::make_shared<const Tier>(std::move(tier)));
 }
 
 template <int D>
@@ -248,7 +270,8 @@ size_t
 FieldSampler<D>::memoryUsage() const
 {
     size_t bytes = sizeof(*this);
-    for (const Tier& t : mTiers) {
+    for (const auto& tier : mTiers) {
+        const Tier& t = *tier;
         bytes += sizeof(Tier) + t.table.memoryUsage() + t.values.size() * sizeof(float) +
                  t.complete.size() * sizeof(uint8_t);
     }
@@ -262,7 +285,7 @@ FieldSampler<D>::locate(const Vec<D>& x, Real* t, int& tierIndex) const
     constexpr int LOG2 = ShapeFields<D>::BLOCK_LOG2DIM;
     constexpr int MASK = BLOCK_DIM - 1;
     for (size_t ti = 0; ti < mTiers.size(); ++ti) {
-        const Tier& tier = mTiers[ti];
+        const Tier& tier = *mTiers[ti];
         int r[3] = {0, 0, 0};
         bool inRange = true;
         for (int a = 0; a < D; ++a) {
@@ -314,7 +337,7 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) c
     int tier = -1;
     const float* base = locate(x, t, tier);
     if (base == nullptr) return false;
-    if (tierVoxelSize) *tierVoxelSize = mTiers[size_t(tier)].h;
+    if (tierVoxelSize) *tierVoxelSize = mTiers[size_t(tier)]->h;
     double w[D][3];
     for (int a = 0; a < D; ++a)
         splineWeights(t[a], w[a]);
@@ -345,7 +368,7 @@ FieldSampler<D>::sample(const Vec<D>& x, RawFields<D>& fields, RawFieldDerivativ
             splineDerivativeWeights(t[a], dw[a]);
         double grad[D][NC];
         interpolateAll<D, true>(base, w, dw, value, grad);
-        const double invH = mTiers[size_t(tierIndex)].invH;
+        const double invH = mTiers[size_t(tierIndex)]->invH;
         for (int k = 0; k < D; ++k) {
             deriv->dd[k] = grad[k][0] * invH;
             for (int i = 0; i < D; ++i)

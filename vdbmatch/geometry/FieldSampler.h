@@ -76,6 +76,11 @@ public:
     explicit FieldSampler(const std::vector<const ShapeFields<D>*>& tiersFinestFirst,
                           bool threaded = true);
 
+    /// The tiers of @a samplersFinestFirst, in that order, shared with them (not copied):
+    /// a sampler that reuses tiers built for another level.
+    /// @throw openvdb::ValueError if a pointer is null or the tiers are not ordered finest first.
+    explicit FieldSampler(const std::vector<ConstPtr>& samplersFinestFirst);
+
     /// Same as the constructor taking grids.
     static Ptr build(const std::vector<openvdb::FloatGrid::ConstPtr>& tiersFinestFirst,
                      const ShapeFieldOptions& opts)
@@ -85,9 +90,9 @@ public:
 
     size_t tierCount() const { return mTiers.size(); }
     /// Voxel size h of a tier, Omega units.
-    Real voxelSize(size_t tier) const { return mTiers[tier].h; }
+    Real voxelSize(size_t tier) const { return mTiers[tier]->h; }
     /// Number of stored blocks of a tier.
-    size_t blockCount(size_t tier) const { return mTiers[tier].blocks; }
+    size_t blockCount(size_t tier) const { return mTiers[tier]->blocks; }
     /// Bytes used by the stored fields, block tables and flags.
     size_t memoryUsage() const;
 
@@ -118,8 +123,9 @@ private:
     /// First float of the stencil's corner node and t per axis, or nullptr.
     const float* locate(const Vec<D>& x, Real* t, int& tier) const;
     void addTier(const ShapeFields<D>& fields, bool threaded);
+    void checkOrder(Real h) const;
 
-    std::vector<Tier> mTiers;
+    std::vector<std::shared_ptr<const Tier>> mTiers;
 };
 
 extern template class FieldSampler<2>;

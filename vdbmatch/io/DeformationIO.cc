@@ -57,6 +57,7 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
     std::vector<char> bad(leafCount, 0);
 
     auto fill = [&](const tbb::blocked_range<std::size_t>& range) {
+        typename multiscale::PiecewiseLinearInterpolator<D>::Cursor cursor(phi);
         for (std::size_t li = range.begin(); li != range.end(); ++li) {
             const int bx = int(li % std::size_t(leaves1));
             const int by = int((li / std::size_t(leaves1)) % std::size_t(leaves1));
@@ -74,7 +75,7 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                         for (int a = 0; a < D; ++a)
                             x[a] = ijk[a] * H;
                         Vec<D> du = Vec<D>::Zero();
-                        phi.evaluate(u, x, du);
+                        cursor.evaluate(u, x, du);
                         openvdb::Vec3s value(0.0f);
                         for (int a = 0; a < D; ++a) {
                             value[a] = float(du[a] * toWorld);

@@ -12,6 +12,21 @@
 namespace vdbmatch {
 namespace multiscale {
 
+namespace {
+
+/// The P1 interpolant at a located point (zero weights skipped, nodes in path order).
+template <int D, typename Location>
+Vec<D>
+weightedSum(const NodeVectors<D>& u, const Location& loc)
+{
+    Vec<D> v = Vec<D>::Zero();
+    for (int m = 0; m <= D; ++m)
+        if (loc.weights[m] != 0) v += loc.weights[m] * u.col(loc.nodes[m]);
+    return v;
+}
+
+} // namespace
+
 template <int D>
 PiecewiseLinearInterpolator<D>::PiecewiseLinearInterpolator(const SimplexLattice<D>& lattice)
     : mLattice(&lattice)
@@ -29,6 +44,46 @@ template <int D>
 bool
 PiecewiseLinearInterpolator<D>::locate(const Vec<D>& x, Location& loc) const
 {
+    return locateWith(x, loc, [this](std::size_t s, const openvdb::Coord& c) {
+        return mCellIndex[s]->tree().getValue(c);
+    });
+}
+
+template <int D>
+PiecewiseLinearInterpolator<D>::Cursor::Cursor(const PiecewiseLinearInterpolator& interpolator)
+    : mInterpolator(&interpolator)
+{
+    for (const auto& grid : interpolator.mCellIndex)
+        mAccessors.push_back(
+            grid ? std::make_unique<openvdb::Int32Grid::ConstAccessor>(grid->constTree())
+                 : nullptr);
+}
+
+template <int D>
+bool
+PiecewiseLinearInterpolator<D>::Cursor::locate(const Vec<D>& x, Location& loc)
+{
+    return mInterpolator->locateWith(x, loc, [this](std::size_t s, const openvdb::Coord& c) {
+        return mAccessors[s]->getValue(c);
+    });
+}
+
+template <int D>
+bool
+PiecewiseLinearInterpolator<D>::Cursor::evaluate(const NodeVectors<D>& u, const Vec<D>& x,
+                                                 Vec<D>& value)
+{
+    Location loc;
+    if (!locate(x, loc)) return false;
+    value = weightedSum(u, loc);
+    return true;
+}
+
+template <int D>
+template <typename CellAt>
+bool
+PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const
+{
     for (int a = 0; a < D; ++a)
         if (!(x[a] >= 0 && x[a] <= 1)) return false;
     const auto& L = *mLattice;
@@ -45,14 +100,13 @@ PiecewiseLinearInterpolator<D>::locate(const Vec<D>& x, Location& loc) const
             base[a] = int(f);
             if (q == f) faceAxes |= 1 << a;
         }
-        const auto& tree = mCellIndex[s]->tree();
         // Candidates: base, and base - 1 along any subset of the face axes.
         for (int sub = 0; sub < (1 << D); ++sub) {
             if ((sub & faceAxes) != sub) continue;
             openvdb::Coord c = base;
             for (int a = 0; a < D; ++a)
                 if (sub & (1 << a)) c[a] -= 1;
-            const int32_t ci = tree.getValue(c);
+            const int32_t ci = cellAt(s, c);
             if (ci < 0) continue;
             const auto& cell = L.cells()[std::size_t(ci)];
             Vec<D> t;
@@ -83,10 +137,7 @@ PiecewiseLinearInterpolator<D>::evaluate(const NodeVectors<D>& u, const Vec<D>& 
 {
     Location loc;
     if (!locate(x, loc)) return false;
-    Vec<D> v = Vec<D>::Zero();
-    for (int m = 0; m <= D; ++m)
-        if (loc.weights[m] != 0) v += loc.weights[m] * u.col(loc.nodes[m]);
-    value = v;
+    value = weightedSum(u, loc);
     return true;
 }
 
@@ -108,9 +159,10 @@ prolongate(const SimplexLattice<D>& coarse, const NodeVectors<D>& uCoarse,
     const PiecewiseLinearInterpolator<D> interpolator(coarse);
     NodeVectors<D> u = NodeVectors<D>::Zero(D, fine.nodeCount());
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+        typename PiecewiseLinearInterpolator<D>::Cursor cursor(interpolator);
         Vec<D> value;
         for (std::size_t i = r.begin(); i != r.end(); ++i)
-            if (interpolator.evaluate(uCoarse, fine.nodePosition(i), value)) u.col(i) = value;
+            if (cursor.evaluate(uCoarse, fine.nodePosition(i), value)) u.col(i) = value;
     };
     const tbb::blocked_range<std::size_t> range(0, fine.nodeCount(), 1024);
     if (threaded)

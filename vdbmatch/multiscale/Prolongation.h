@@ -31,6 +31,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace vdbmatch {
@@ -61,7 +62,24 @@ public:
     /// unchanged) if no cell contains x.
     bool evaluate(const NodeVectors<D>& u, const Vec<D>& x, Vec<D>& value) const;
 
+    /// The same queries through cached tree accessors, for many nearby points from one thread
+    /// (the results equal the interpolator's own, bit for bit). Not thread-safe: one per thread.
+    class Cursor
+    {
+    public:
+        explicit Cursor(const PiecewiseLinearInterpolator& interpolator);
+        bool locate(const Vec<D>& x, Location& loc);
+        bool evaluate(const NodeVectors<D>& u, const Vec<D>& x, Vec<D>& value);
+
+    private:
+        const PiecewiseLinearInterpolator* mInterpolator;
+        std::vector<std::unique_ptr<openvdb::Int32Grid::ConstAccessor>> mAccessors;
+    };
+
 private:
+    /// locate() with @a cellAt(s, ijk) giving the index of the cell of side 2^s at ijk (or -1).
+    template <typename CellAt> bool locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const;
+
     const SimplexLattice<D>* mLattice;
     /// mCellIndex[s]: voxel origin/2^s -> index of the cell of side 2^s h, or null if none.
     std::vector<openvdb::Int32Grid::Ptr> mCellIndex;
