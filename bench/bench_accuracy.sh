@@ -18,16 +18,19 @@
 # same and more (max errors, reverse figures, iterations, statuses).
 #
 # Usage: bench/bench_accuracy.sh [VDB_MATCH] [--pairs a,b,...] [--levels3d 4..7] [--levels2d 4..9]
-#            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"]
+#            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
 #   VDB_MATCH   default build/tools/vdb_match/vdb_match
 #   --pairs     default all: creature_articulated, creature_swirl, creature_stretch,
-#               figure_articulated, figure_swirl, figure_stretch (make_pairs.py --list)
+#               figure_articulated, figure_arms_up, figure_swirl, figure_stretch
+#               (make_pairs.py --list)
 #   --levels3d  default 4..8 (the 3D default of vdb_match); --levels2d default 4..9
 #   --energies  default symmetric,directional
 #   --out DIR   keep pairs and outputs in DIR (pairs are regenerated only when missing or older
 #               than make_pairs.py); default: a temporary directory, removed at the end
 #   --extra     more vdb_match match options, e.g. --extra "--threads 1 --energy-tolerance 3e-2"
 #               (--threads is also passed to consistency)
+#   --landmarks give vdb_match the pair's landmarks (make_pairs.py: 5 extremities of the source
+#               and their true images), forward A B and reverse B A
 # Exit status: 0, or 1 with a message if generation, a match, consistency or scoring fails.
 set -euo pipefail
 
@@ -41,9 +44,11 @@ LEVELS2D=4..9
 ENERGIES=symmetric,directional
 OUT=
 EXTRA=
+LANDMARKS=0
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
+    --landmarks) LANDMARKS=1; shift ;;
     --pairs|--levels3d|--levels2d|--energies|--out|--extra)
       [ $# -ge 2 ] || die "$1 needs a value"
       case "$1" in
@@ -97,13 +102,14 @@ OUT=$(cd "$OUT" && pwd)
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -n1))"
-echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'"
+echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'$([ $LANDMARKS = 0 ] || echo '; landmarks')"
 echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
 
 # --- pairs -----------------------------------------------------------------------------------
 missing=()
 for p in "${PAIR_LIST[@]}"; do
-  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ]; then
+  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ] \
+      || { [ $LANDMARKS = 1 ] && [ ! -f "$OUT/pairs/$p/landmarks_source.csv" ]; }; then
     missing+=("$p")
   fi
 done
@@ -119,10 +125,11 @@ fi
 echo
 
 # --- matches ---------------------------------------------------------------------------------
-run_match() {  # SOURCE TARGET DIR LEVELS ENERGY; sets WALL
+run_match() {  # SOURCE TARGET DIR LEVELS ENERGY [LANDMARKS_A LANDMARKS_B]; sets WALL
   local dir=$3 start end rc=0
   mkdir -p "$dir"
   local cmd=("$VDB_MATCH" match "$1" "$2" -o "$dir" --levels "$4" --energy "$5" --quiet "${EXTRA_ARGS[@]}")
+  [ $# -lt 7 ] || cmd+=(--landmarks "$6" "$7")
   start=$(date +%s.%N)
   "${cmd[@]}" >"$dir/stdout.txt" 2>"$dir/stderr.txt" || rc=$?
   end=$(date +%s.%N)
@@ -143,8 +150,11 @@ for energy in "${ENERGY_LIST[@]}"; do
     dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
     if [ "$dim" = 3 ]; then ext=obj; levels=$LEVELS3D; else ext=polyline; levels=$LEVELS2D; fi
     rd=$OUT/runs/$p/$energy
-    run_match "$pd/source.$ext" "$pd/target.$ext" "$rd/forward" "$levels" "$energy"; fwall=$WALL
-    run_match "$pd/target.$ext" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy"; rwall=$WALL
+    marks=()
+    [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_source.csv" "$pd/landmarks_target.csv")
+    run_match "$pd/source.$ext" "$pd/target.$ext" "$rd/forward" "$levels" "$energy" "${marks[@]}"; fwall=$WALL
+    [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_target.csv" "$pd/landmarks_source.csv")
+    run_match "$pd/target.$ext" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy" "${marks[@]}"; rwall=$WALL
     "$VDB_MATCH" consistency "$rd/forward/deformation.vdb" "$rd/reverse/deformation.vdb" \
         --source "$pd/source.$ext" --target "$pd/target.$ext" --json "${THREAD_ARGS[@]}" \
         >"$rd/consistency.json" 2>"$rd/consistency.stderr" \

@@ -266,3 +266,46 @@ TEST(Match, ThreadCountIndependence3D)
     ASSERT_EQ(results[0].displacement.cols(), results[1].displacement.cols());
     EXPECT_TRUE((results[0].displacement.array() == results[1].displacement.array()).all());
 }
+
+TEST(Match, LandmarksTurnACircleNoShapeEnergyCanTell)
+{
+    // A circle onto itself: every rotation about its centre matches the shape equally well, so
+    // without landmarks phi stays near the identity on it. Three landmarks on the circle whose
+    // targets are turned by 20 degrees make phi turn it (an addition to the paper's energy).
+    const Vec<2> centre(0, 0);
+    const Surface<2> circle = ellipseCurve(centre, 1.0, 1.0, 400);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 6;
+    const UnitBoxPlacement placement = placeInUnitBox(circle, circle, opts.margin);
+    const Real turn = 20 * M_PI / 180;
+    for (int k = 0; k < 3; ++k) {
+        const Real t = 2 * M_PI * k / 3 + 0.3;
+        opts.sourceLandmarks.emplace_back(std::cos(t), std::sin(t), 0.0);
+        opts.targetLandmarks.emplace_back(std::cos(t + turn), std::sin(t + turn), 0.0);
+    }
+    const Real chord = 2 * std::sin(turn / 2); // |b_k - a_k|, world units
+    MatchOptions without = opts;
+    without.landmarkWeight = 0; // the term is there but weighs nothing
+    const MatchResult<2> free = match<2>(circle, circle, placement, without);
+    const MatchResult<2> guided = match<2>(circle, circle, placement, opts);
+    ASSERT_TRUE(free.isComplete());
+    ASSERT_TRUE(guided.isComplete());
+    EXPECT_EQ(guided.landmarks.count, 3u);
+    EXPECT_NEAR(guided.landmarks.startMeanWorld, chord, 1e-12);
+    EXPECT_GT(free.landmarks.meanWorld, 0.9 * chord);
+    EXPECT_LT(guided.landmarks.meanWorld, 0.1 * chord);
+    // The surface still fits: every vertex stays on the circle to within half a cell.
+    const Real halfCell = placement.toWorldLength(0.5 * std::ldexp(1.0, -opts.multiscale.maxLevel));
+    EXPECT_LT(guided.residual.maxWorld, halfCell);
+    EXPECT_GT(guided.minJacobian, 0);
+    // ... and the vertices between the landmarks turned too, about as far.
+    Real turned = 0;
+    for (std::size_t i = 0; i < circle.points.size(); ++i) {
+        const Vec<2>& p = circle.points[i];
+        const Vec<2>& q = guided.deformedSource.points[i];
+        turned += std::atan2(p[0] * q[1] - p[1] * q[0], p.dot(q));
+    }
+    turned /= Real(circle.points.size());
+    EXPECT_NEAR(turned, turn, 0.25 * turn);
+}

@@ -126,6 +126,16 @@ MatchOptions::validate() const
                                                << MAX_REFINEMENT_MARGIN_CELLS << "], got "
                                                << refinementMarginCells);
     }
+    if (sourceLandmarks.size() != targetLandmarks.size()) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: " << sourceLandmarks.size() << " source landmarks but "
+                                       << targetLandmarks.size() << " target landmarks");
+    }
+    if (!(landmarkWeight >= 0) || !std::isfinite(landmarkWeight)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: landmarkWeight must be finite and >= 0, got "
+                          << landmarkWeight);
+    }
     if (coarsestLevel > multiscale.minLevel) {
         OPENVDB_THROW(openvdb::ValueError, "MatchOptions: coarsestLevel ("
                                                << coarsestLevel << ") must not exceed minLevel ("
@@ -251,6 +261,45 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
 
     MatchResult<D> result;
     result.placement = placement;
+    // Landmarks in Omega units; the source points must lie inside Omega (the target points
+    // need not: the term pulls phi(a_k) towards them).
+    LandmarkPairs<D> landmarks;
+    landmarks.weight = Real(opts.landmarkWeight);
+    for (std::size_t k = 0; k < opts.sourceLandmarks.size(); ++k) {
+        Vec<D> a, b;
+        const openvdb::Vec3d ua = placement.toUnit(opts.sourceLandmarks[k]);
+        const openvdb::Vec3d ub = placement.toUnit(opts.targetLandmarks[k]);
+        for (int i = 0; i < D; ++i) {
+            a[i] = ua[i];
+            b[i] = ub[i];
+        }
+        if (!a.allFinite() || !b.allFinite()) {
+            OPENVDB_THROW(openvdb::ValueError, "match: landmark pair "
+                                                   << k + 1
+                                                   << " has a coordinate that is not finite");
+        }
+        for (int i = 0; i < D; ++i) {
+            if (!(a[i] > 0 && a[i] < 1)) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              "match: source landmark "
+                                  << k + 1
+                                  << " lies outside the unit box of the shapes (it should lie on "
+                                     "or near the source shape)");
+            }
+        }
+        landmarks.source.push_back(a);
+        landmarks.target.push_back(b);
+        Vec<D> first = a; // phi(a_k) at the start of the first level
+        if (opts.initial) {
+            const openvdb::Vec3d du = opts.initial->displacement(toPoint3<D>(a));
+            for (int i = 0; i < D; ++i)
+                first[i] += du[i];
+        }
+        const double r = placement.toWorldLength((first - b).norm());
+        result.landmarks.startMeanWorld += r / double(opts.sourceLandmarks.size());
+        result.landmarks.startMaxWorld = std::max(result.landmarks.startMaxWorld, r);
+    }
+    result.landmarks.count = landmarks.source.size();
     std::shared_ptr<const FieldSampler<D>> lastTarget;
     LevelSummary pending;
     // Distance tiers shared between levels (the coarse box and the band two levels down).
@@ -279,6 +328,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 buildTarget();
             }
             level.surfacePoints = &unitSource.points;
+            if (!landmarks.source.empty()) level.landmarks = &landmarks;
             summary.fieldSeconds = secondsSince(t0);
 
             t0 = Clock::now();
@@ -439,6 +489,13 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 maxAbs = std::max<double>(maxAbs, std::abs(d));
                 ++n;
             }
+        }
+        if (!landmarks.source.empty()) {
+            const energy::LandmarkTerm<D> term(*result.lattice, landmarks);
+            Real mean = 0, max = 0;
+            term.residual(result.displacement, mean, max);
+            result.landmarks.meanWorld = placement.toWorldLength(mean);
+            result.landmarks.maxWorld = placement.toWorldLength(max);
         }
         result.residual.samples = n;
         result.residual.meanUnit = n ? sum / double(n) : 0.0;

@@ -60,6 +60,8 @@ namespace vdbmatch {
 /// (DescentOptions::settleTolerance, --settle-tolerance) stops much earlier and is off: on the
 /// benchmark it lost accuracy on 5 of 6 pairs.
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
+/// Default c_lm of the landmark term (energy/LandmarkTerm.h): docs/numerics.md "Landmarks".
+constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
@@ -127,6 +129,12 @@ struct MatchOptions
     int coarsestLevel = 0;
     /// Start of the first level (multiscale.minLevel) instead of phi = Id; null: the identity.
     std::shared_ptr<const InitialDisplacement> initial;
+    /// Optional landmark pairs, world units of the inputs (2D: z ignored), the same count: a
+    /// soft term c_lm / K sum |phi(a_k) - b_k|^2 added at every level (energy/LandmarkTerm.h,
+    /// an addition to the paper's energy). Empty: none.
+    std::vector<openvdb::Vec3d> sourceLandmarks, targetLandmarks;
+    /// c_lm of the landmark term, Omega units (>= 0).
+    double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -156,6 +164,15 @@ struct LevelSummary
     double latticeSeconds = 0; ///< adaptive lattice
 };
 
+/// |phi(a_k) - b_k| over the landmark pairs (MatchOptions::sourceLandmarks), before (phi = the
+/// start of the first level) and after the match.
+struct LandmarkResidual
+{
+    std::size_t count = 0;
+    double startMeanWorld = 0, startMaxWorld = 0; ///< world units, at the start
+    double meanWorld = 0, maxWorld = 0;           ///< world units, at the end
+};
+
 /// |d2(phi(v))| over the vertices v of M1.
 struct MatchResidual
 {
@@ -174,6 +191,7 @@ template <int D> struct MatchResult
     /// The source surface moved by phi, world space (same elements as the source).
     Surface<D> deformedSource;
     MatchResidual residual;
+    LandmarkResidual landmarks;
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 

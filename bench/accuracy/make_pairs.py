@@ -34,6 +34,9 @@ Maps g (3D and 2D each; see PAIRS)
 Output: one directory per pair, holding
   source.obj, target.obj (3D) or source.polyline, target.polyline (2D);
   truth.xyz: per source vertex (file order) g(v), world units, space separated;
+  landmarks_source.csv, landmarks_target.csv: 5 extremities of the source (farthest-point
+             sampling from the vertex farthest from the centroid) and their images g(v), for
+             vdb_match --landmarks (bench_accuracy.sh --landmarks);
   pair.json: name, dimension, description, vertex count, mean/max motion |g(v) - v| (world and
              as a fraction of the source's bounding-box diagonal), checks (min det Dg, edges).
 Files are written with 7 decimals; g is applied to the rounded source coordinates, and the
@@ -401,6 +404,19 @@ def figure_articulated():
     return compose(raise_arm, turn_forearm)
 
 
+def figure_arms_up():
+    # Large articulated motion (issue: correspondence): both arms raised 60 degrees at the
+    # shoulders, from hanging at the sides to about horizontal, with the same one-sided weights
+    # as figure_articulated (the hands end bent down). At 90 degrees the skin between arm and
+    # torso is drawn out into a thin flap, not a pose.
+    right = limb_rotation(SHOULDER, HAND - SHOULDER, 60.0, start=0.07, ramp=0.03,
+                          lateral=lambda l: one_sided(-0.10, 0.01, +1)(l) * window(0.3)(l))
+    left = limb_rotation(mirror(SHOULDER), mirror(HAND) - mirror(SHOULDER), -60.0, start=0.07,
+                         ramp=0.03,
+                         lateral=lambda l: one_sided(0.10, 0.01, -1)(l) * window(0.3)(l))
+    return compose(right, left)
+
+
 def figure_swirl():
     arm_r = HAND - SHOULDER
     arm_l = mirror(HAND) - mirror(SHOULDER)
@@ -468,6 +484,9 @@ PAIRS = {
                            "figure: right arm raised 30 deg at the shoulder, left forearm "
                            "turned out 30 deg at the elbow, smooth weight along each limb "
                            "(skeleton-driven smooth flow)"),
+    "figure_arms_up": (2, figure_arms_up,
+                       "figure: both arms raised 60 deg at the shoulders, from hanging at the "
+                       "sides to about horizontal (large articulated motion)"),
     "figure_swirl": (2, figure_swirl,
                      "figure: both arms curled up (angle growing along the arm to about 35 "
                      "deg), a swirl about the chest growing to 12 deg, a sideways bend "
@@ -510,6 +529,27 @@ def probe_grid(points, count):
     return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, points.shape[1])
 
 
+LANDMARKS = 5  # landmark pairs written per pair (bench_accuracy.sh --landmarks)
+
+
+def landmark_indices(points, count=LANDMARKS):
+    """Farthest-point sampling from the vertex farthest from the centroid: the extremities
+    (limb tips, head, feet), deterministic."""
+    chosen = [int(np.argmax(np.linalg.norm(points - points.mean(axis=0), axis=1)))]
+    dist = np.linalg.norm(points - points[chosen[0]], axis=1)
+    while len(chosen) < count:
+        k = int(np.argmax(dist))
+        chosen.append(k)
+        dist = np.minimum(dist, np.linalg.norm(points - points[k], axis=1))
+    return chosen
+
+
+def write_landmarks(path, points):
+    names = "xyz"[:points.shape[1]]
+    rows = "".join(",".join("%.*f" % (DECIMALS, v) for v in p) + "\n" for p in points)
+    write_atomic(path, ",".join(names) + "\n" + rows)
+
+
 def make_pair(name, out_dir, shapes):
     dim, make_g, description = PAIRS[name]
     t0 = time.time()
@@ -547,6 +587,10 @@ def make_pair(name, out_dir, shapes):
         write_polyline(os.path.join(d, "target.polyline"), target, name + " target = g(source)")
         seg = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
     write_atomic(os.path.join(d, "truth.xyz"), "".join(fmt_rows(target)))
+    # Landmarks for vdb_match --landmarks: extremities of the source and their true images.
+    marks = landmark_indices(points)
+    write_landmarks(os.path.join(d, "landmarks_source.csv"), points[marks])
+    write_landmarks(os.path.join(d, "landmarks_target.csv"), target[marks])
     box = points.max(axis=0) - points.min(axis=0)
     pair = {
         "name": name,

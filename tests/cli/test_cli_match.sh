@@ -201,6 +201,45 @@ assert lo < 0 < hi, (lo, hi)
 PY
 fi
 
+# ---------------------------------------------------------------- landmarks (an addition to the paper)
+if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then
+    # Three points of each figure's outline (the hands and the head, roughly), as tables.
+    "$PYTHON" - "$FIGURE_A" "$FIGURE_B" "$SCRATCH" <<'PY'
+import sys
+def points(path):
+    return [l.split()[:2] for l in open(path) if l.strip() and not l.startswith("#")]
+a, b = points(sys.argv[1]), points(sys.argv[2])
+def pick(p):  # lowest-left, rightmost, top vertex: defined on any outline
+    xs = [(float(x), float(y)) for x, y in p]
+    return [min(xs, key=lambda q: (q[1], q[0])), max(xs, key=lambda q: q[0]), max(xs, key=lambda q: q[1])]
+for name, p in (("lm_a.csv", a), ("lm_b.csv", b)):
+    open(sys.argv[3] + "/" + name, "w").write("x,y\n" + "".join("%r,%r\n" % q for q in pick(p)))
+open(sys.argv[3] + "/lm_short.csv", "w").write("x,y\n0,0\n")
+open(sys.argv[3] + "/lm_far.csv", "w").write("x,y\n1e3,0\n0,1\n2,2\n")
+PY
+    check landmarks-one-file 1 '' '--landmarks takes two files' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmarks "$SCRATCH/lm_a.csv" --quiet
+    check landmarks-missing 2 '' 'lm_none.csv' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmarks "$SCRATCH/lm_a.csv" "$SCRATCH/lm_none.csv" --quiet
+    check landmarks-counts 3 '' 'has 3 points but .*lm_short.csv has 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmarks "$SCRATCH/lm_a.csv" "$SCRATCH/lm_short.csv" --quiet
+    check landmarks-outside 3 '' 'source landmark 1 lies outside the unit box' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmarks "$SCRATCH/lm_far.csv" "$SCRATCH/lm_a.csv" --quiet
+    check landmarks-weight 1 '' '--landmark-weight' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmarks "$SCRATCH/lm_a.csv" "$SCRATCH/lm_b.csv" --landmark-weight x --quiet
+    check match-2d-landmarks 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2l" --levels 4..6 --quiet --landmarks "$SCRATCH/lm_a.csv" "$SCRATCH/lm_b.csv"
+    # --config of that report.json reruns it with the same landmarks and the same result.
+    check match-2d-landmarks-config 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2lc" --config "$SCRATCH/m2l/report.json" --quiet
+    count=$((count + 1))
+    if "$PYTHON" - "$SCRATCH/m2" "$SCRATCH/m2l" "$SCRATCH/m2lc" <<'PY'; then echo "ok   landmarks-report"; else fail "landmarks-report"; fi
+import json, sys
+plain, lm, again = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+L = lm["landmarks"]
+assert L["count"] == 3 and L["source"].endswith("lm_a.csv") and L["target"].endswith("lm_b.csv"), L
+assert L["meanWorld"] < 0.5 * L["startMeanWorld"], L
+assert lm["parameters"]["landmarks"] == [L["source"], L["target"]]
+assert lm["result"]["terms"]["landmarks"] > 0 and plain["result"]["terms"]["landmarks"] == 0
+assert "landmarks" not in plain and "landmarks" not in plain["parameters"]
+assert lm["result"]["residual"]["meanUnit"] < lm["levels"][-1]["h"] / 2
+assert again["landmarks"] == L and again["result"]["energy"] == lm["result"]["energy"], again["landmarks"]
+PY
+fi
+
 # ---------------------------------------------------------------- one run per OUTDIR; SIGKILL leaves no result
 "$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/busy" --levels 4..6 --quiet >/dev/null 2>&1 &
 busy=$!

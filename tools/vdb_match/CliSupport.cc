@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <sstream>
@@ -237,7 +238,10 @@ buildApp(CLI::App& app, const std::vector<BoundOption>& options,
                     return true;
                 },
                 b.help);
-            opt->type_name(b.metavar)->type_size(1)->expected(1);
+            // "A.csv B.csv": an option with two values.
+            const int values =
+                1 + int(std::count(b.metavar, b.metavar + std::strlen(b.metavar), ' '));
+            opt->type_name(b.metavar)->type_size(1)->expected(values);
             opt->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
         } else {
             opt = app.add_flag_callback(
@@ -312,7 +316,9 @@ parseCommandLine(const std::vector<BoundOption>& options, int argc, const char* 
         for (const BoundOption& b : options) {
             for (const std::string& n : splitNames(b.names)) {
                 if (b.metavar && std::find(words.begin(), words.end(), n) != words.end()) {
-                    throw UsageError(canonicalName(b.names.c_str()) + " expects a value " +
+                    const bool two = std::strchr(b.metavar, ' ') != nullptr;
+                    throw UsageError(canonicalName(b.names.c_str()) +
+                                     (two ? " expects two values " : " expects a value ") +
                                      b.metavar);
                 }
             }

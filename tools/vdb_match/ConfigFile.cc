@@ -42,6 +42,8 @@ configKeys()
         {"surfaceTolerance", "--surface-tolerance"},
         {"surfaceLevels", "--surface-levels"},
         {"relativeGradientTolerance", "--gradient-tolerance"},
+        {"landmarkWeight", "--landmark-weight"},
+        {"landmarks", "--landmarks"},
     };
     return keys;
 }
@@ -83,6 +85,17 @@ parseConfig(const std::string& text, const std::string& path)
             OPENVDB_THROW(openvdb::ValueError, "--config: unknown key '" << key << "' in '" << path
                                                                          << "' (known: " << known
                                                                          << ")");
+        }
+        // "landmarks": the two files of --landmarks.
+        if (key == "landmarks") {
+            if (!value.is_array() || value.size() != 2 || !value[0].is_string() ||
+                !value[1].is_string()) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              "--config: 'landmarks' must be an array of two file names");
+            }
+            for (const auto& file : value)
+                settings.push_back({key, option, file.get<std::string>()});
+            continue;
         }
         if (!value.is_number() && !value.is_string()) {
             OPENVDB_THROW(openvdb::ValueError,

@@ -19,6 +19,7 @@
 #include <vdbmatch/io/JacobianGrid.h>
 #include <vdbmatch/io/LevelSetIO.h>
 #include <vdbmatch/io/MeshIO.h>
+#include <vdbmatch/io/PointTable.h>
 #include <vdbmatch/io/ShapeIO.h>
 
 #include <openvdb/openvdb.h>
@@ -74,8 +75,10 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
-    std::string config;             ///< --config FILE (applied before the other options)
-    std::string init;               ///< --init DEFORMATION.vdb: start from an earlier result
+    std::string config; ///< --config FILE (applied before the other options)
+    std::string init;   ///< --init DEFORMATION.vdb: start from an earlier result
+    std::vector<std::string> landmarkFiles; ///< --landmarks A B: source and target points
+    double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     bool writeInverse = true;       ///< inverse.vdb
     bool writeJacobian = true;      ///< jacobian.vdb
@@ -208,6 +211,14 @@ matchOptionTable()
         {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
          "[1,2,1]/4 smoothing passes of the distance Hessian, >= 0 (default 0)",
          [](O& o, const std::string& v) { o.hessianSmoothing = parseInt("--hessian-smoothing", v); }},
+        {"--landmarks", "A.csv B.csv", "Landmarks (an addition to the paper)",
+         "corresponding points: row k of A (on the source) should map to row k of B (on the "
+         "target); .csv/.xyz/.txt tables with columns x, y (and z in 3D), world units of the "
+         "inputs. Adds the soft term c_lm/K sum |phi(a_k) - b_k|^2 (docs/numerics.md)",
+         [](O& o, const std::string& v) { o.landmarkFiles.push_back(v); }},
+        {"--landmark-weight", "X", "Landmarks (an addition to the paper)",
+         "c_lm, the weight of the landmark term, unit-box lengths (default " + formatNumber(d.landmarkWeight) + ")",
+         [](O& o, const std::string& v) { o.landmarkWeight = parseDouble("--landmark-weight", v); }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
          [](O& o, const std::string& v) { o.maxIterations = parseInt("--max-iterations", v); }},
@@ -313,8 +324,12 @@ parseMatchOptions(int argc, const char* const* argv, int first)
         if (arg.rfind("--config=", 0) == 0) o.config = arg.substr(9);
     }
     if (!o.config.empty()) applyConfig(o.config, o);
+    // --landmarks on the command line replaces the config's pair (the option appends).
+    std::vector<std::string> configLandmarks;
+    std::swap(configLandmarks, o.landmarkFiles);
     const std::vector<std::string> positional =
         parseOptions(matchOptionTable(), argc, argv, first, o);
+    if (o.landmarkFiles.empty()) o.landmarkFiles = configLandmarks;
     assignInputs(positional, o.source, o.target, "expected SOURCE TARGET");
     if (o.outDir.empty()) throw UsageError("missing the output directory: -o OUTDIR");
     if (!o.grid.empty() && (!o.sourceGrid.empty() || !o.targetGrid.empty())) {
@@ -357,7 +372,8 @@ termsText(const EnergyTerms& t)
 {
     return "match " + fixed("%.3e", t.match[0] + t.match[1]) + " mem " +
            fixed("%.3e", t.mem[0] + t.mem[1]) + " bend " + fixed("%.3e", t.bend[0] + t.bend[1]) +
-           " vol " + fixed("%.3e", t.vol[0] + t.vol[1]);
+           " vol " + fixed("%.3e", t.vol[0] + t.vol[1]) +
+           (t.landmark != 0 ? " landmarks " + fixed("%.3e", t.landmark) : std::string());
 }
 
 /// Progress on stderr with an estimate of the time left: a level is assumed to cost the time
@@ -470,11 +486,8 @@ pairJson(const Real* v)
 Json
 termsJson(const EnergyTerms& t)
 {
-    return Json{{"match", pairJson(t.match)},
-                {"mem", pairJson(t.mem)},
-                {"bend", pairJson(t.bend)},
-                {"vol", pairJson(t.vol)},
-                {"total", t.total()}};
+    return Json{{"match", pairJson(t.match)}, {"mem", pairJson(t.mem)},  {"bend", pairJson(t.bend)},
+                {"vol", pairJson(t.vol)},     {"landmarks", t.landmark}, {"total", t.total()}};
 }
 
 template <int D>
@@ -623,7 +636,18 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"surfaceTolerance", opts.multiscale.surfaceTolerance},
              {"surfaceLevels", opts.multiscale.surfaceLevels},
              {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
-             {"relativeGradientTolerance", descent.relativeGradientTolerance}});
+             {"relativeGradientTolerance", descent.relativeGradientTolerance},
+             {"landmarkWeight", opts.landmarkWeight}});
+    if (!o.landmarkFiles.empty()) {
+        params["landmarks"] = o.landmarkFiles;
+        j["landmarks"] = Json{{"source", o.landmarkFiles[0]},
+                              {"target", o.landmarkFiles[1]},
+                              {"count", r.landmarks.count},
+                              {"startMeanWorld", r.landmarks.startMeanWorld},
+                              {"startMaxWorld", r.landmarks.startMaxWorld},
+                              {"meanWorld", r.landmarks.meanWorld},
+                              {"maxWorld", r.landmarks.maxWorld}};
+    }
     Json levels = Json::array();
     for (const LevelSummary& l : r.levels) {
         const solver::Report& rep = l.report;
@@ -750,6 +774,28 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                           << ", the smallest voxel OpenVDB's transforms represent; rescale the "
                              "inputs (e.g. to millimetres) or lower --max-level");
     }
+
+    // --landmarks A B: the same number of points in each, in world units of the inputs.
+    if (!o.landmarkFiles.empty()) {
+        if (o.landmarkFiles.size() != 2)
+            throw UsageError("--landmarks takes two files (source and target points) once");
+        const PointTable a = PointTable::read(o.landmarkFiles[0], D);
+        const PointTable b = PointTable::read(o.landmarkFiles[1], D);
+        if (a.size() != b.size()) {
+            OPENVDB_THROW(openvdb::ValueError, "--landmarks: " << o.landmarkFiles[0] << " has "
+                                                               << a.size() << " points but "
+                                                               << o.landmarkFiles[1] << " has "
+                                                               << b.size());
+        }
+        if (a.size() == 0) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "--landmarks: " << o.landmarkFiles[0] << " has no points");
+        }
+        opts.sourceLandmarks = a.positions();
+        opts.targetLandmarks = b.positions();
+    }
+    opts.landmarkWeight = o.landmarkWeight;
+    opts.validate();
 
     // --init: an earlier result of these inputs; the run starts after its finest level (or at
     // the last requested one), with cells no coarser than those of the requested first level.

@@ -21,7 +21,7 @@ Real
 EnergyTerms::total() const
 {
     if (invertedSimplices > 0) return INF;
-    return match[0] + match[1] + mem[0] + mem[1] + bend[0] + bend[1] + vol[0] + vol[1];
+    return match[0] + match[1] + mem[0] + mem[1] + bend[0] + bend[1] + vol[0] + vol[1] + landmark;
 }
 
 EnergyTerms&
@@ -33,6 +33,7 @@ EnergyTerms::operator+=(const EnergyTerms& o)
         bend[i] += o.bend[i];
         vol[i] += o.vol[i];
     }
+    landmark += o.landmark;
     invertedSimplices += o.invertedSimplices;
     bandSimplices += o.bandSimplices;
     coarseBandSimplices += o.coarseBandSimplices;
@@ -377,19 +378,23 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
     if (!interrupted)
         for (const auto& p : partial)
             sum += p;
-    if (terms) *terms = sum;
     if (interrupted) {
+        if (terms) *terms = sum;
         if (gradient) gradient->setZero(D, L.nodeCount());
         return INF;
     }
-    const Real e = sum.total();
     if constexpr (Grad) {
-        if (std::isfinite(e))
+        if (std::isfinite(sum.total())) {
             L.gatherSlots(perSlot, *gradient, threaded);
-        else
+            if (mLandmarks) sum.landmark = mLandmarks->addGradient(u, *gradient);
+        } else {
             gradient->setZero(D, L.nodeCount());
+        }
+    } else if (mLandmarks && std::isfinite(sum.total())) {
+        sum.landmark = mLandmarks->value(u);
     }
-    return e;
+    if (terms) *terms = sum;
+    return sum.total();
 }
 
 template <int D>

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <vdbmatch/Parameters.h>
+#include <vdbmatch/energy/LandmarkTerm.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 #include <vdbmatch/kinematics/SurfaceFrame.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
@@ -39,6 +40,7 @@ struct EnergyTerms
     Real mem[2] = {0, 0};
     Real bend[2] = {0, 0};
     Real vol[2] = {0, 0};
+    Real landmark = 0; ///< E_lm (LandmarkTerm.h), an addition to the paper's terms; 0 without
     std::size_t invertedSimplices = 0; ///< simplices with det D phi <= 0 (energy +inf)
     std::size_t bandSimplices = 0;     ///< simplices where a band term was evaluated
     /// ... of which in cells larger than h: the band reached beyond the fine region of an
@@ -92,6 +94,10 @@ public:
     /// without it (tests/energy/TestEnergy.cc compares them); the switch is for those tests.
     void setCellCulling(bool on) { mCullCells = on; }
 
+    /// Adds E_lm of @a landmarks (on the same lattice; must outlive the energy) to every
+    /// evaluation; null removes it.
+    void setLandmarks(const energy::LandmarkTerm<D>* landmarks) { mLandmarks = landmarks; }
+
 private:
     template <bool Grad>
     Real evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
@@ -134,6 +140,7 @@ private:
     EnergyParameters mParams;
     EnergyKind mKind;
     Real mSigma;
+    const energy::LandmarkTerm<D>* mLandmarks = nullptr;
     Real mMatchWeight;  ///< c_match sigma^{-q}
     Real mVolumeWeight; ///< c_vol sigma^theta
 };

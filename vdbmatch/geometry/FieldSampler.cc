@@ -160,8 +160,7 @@ FieldSampler<D>::FieldSampler(const std::vector<const ShapeFields<D>*>& tiersFin
     }
 }
 
-template <int D>
-FieldSampler<D>::FieldSampler(const std::vector<ConstPtr>& samplersFinestFirst)
+template <int D> FieldSampler<D>::FieldSampler(const std::vector<ConstPtr>& samplersFinestFirst)
 {
     for (size_t i = 0; i < samplersFinestFirst.size(); ++i) {
         if (!samplersFinestFirst[i]) {

@@ -7,6 +7,7 @@
 #include <openvdb/Exceptions.h>
 
 #include <cmath>
+#include <optional>
 
 namespace vdbmatch {
 namespace multiscale {
@@ -110,7 +111,12 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         // ones up to rounding when the lattice nests in the previous one).
         in.lattice->expand(u);
 
-        const Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
+        Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
+        std::optional<energy::LandmarkTerm<D>> landmarks;
+        if (in.landmarks && !in.landmarks->source.empty()) {
+            landmarks.emplace(*in.lattice, *in.landmarks);
+            energy.setLandmarks(&*landmarks);
+        }
         const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();
         const solver::H1Metric<D> metric(*in.lattice, tau, mOpts.metric, threaded);
         solver::DescentOptions levelDescent = mOpts.descent;

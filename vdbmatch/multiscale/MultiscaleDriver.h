@@ -18,6 +18,7 @@
 #pragma once
 
 #include <vdbmatch/Parameters.h>
+#include <vdbmatch/energy/LandmarkTerm.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
 #include <vdbmatch/solver/Descent.h>
@@ -42,6 +43,9 @@ template <int D> struct Level
     /// Points of M1 (Omega units) watched by the surface test (MultiscaleOptions::
     /// surfaceTolerance); null or empty: the test is off at this level. Must outlive run().
     const std::vector<Vec<D>>* surfacePoints = nullptr;
+    /// Landmark pairs (Omega units) added to the energy (energy::LandmarkTerm); null or empty:
+    /// none. Must outlive run().
+    const LandmarkPairs<D>* landmarks = nullptr;
 };
 
 /// Builds the inputs of level l (called once per level, in increasing order, on the calling

@@ -78,7 +78,8 @@ public:
 
 private:
     /// locate() with @a cellAt(s, ijk) giving the index of the cell of side 2^s at ijk (or -1).
-    template <typename CellAt> bool locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const;
+    template <typename CellAt>
+    bool locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const;
 
     const SimplexLattice<D>* mLattice;
     /// mCellIndex[s]: voxel origin/2^s -> index of the cell of side 2^s h, or null if none.
