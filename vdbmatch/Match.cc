@@ -98,18 +98,26 @@ tierSlack(const FieldSampler<D>& sampler, const Vec<D>& x)
 } // namespace
 
 MatchOptions
-MatchOptions::defaults(int dim)
+MatchOptions::paper(int dim)
 {
     MatchOptions opts;
     opts.multiscale = multiscale::MultiscaleOptions::defaults(dim);
     opts.multiscale.descent.energyTolerance = DEFAULT_MATCH_ENERGY_TOLERANCE;
     opts.multiscale.descent.settleTolerance = DEFAULT_MATCH_SETTLE_TOLERANCE;
     opts.multiscale.toleranceCoarsening = DEFAULT_MATCH_TOLERANCE_COARSENING;
-    opts.multiscale.surfaceTolerance =
-        dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
+    opts.multiscale.surfaceTolerance = 0;
     opts.multiscale.surfaceLevels = DEFAULT_MATCH_SURFACE_LEVELS;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
+    return opts;
+}
+
+MatchOptions
+MatchOptions::defaults(int dim)
+{
+    MatchOptions opts = paper(dim);
+    opts.multiscale.surfaceTolerance =
+        dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
     return opts;
 }
 

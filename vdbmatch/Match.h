@@ -138,8 +138,13 @@ struct MatchOptions
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
-    /// DEFAULT_MATCH_METRIC_TOLERANCE.
+    /// DEFAULT_MATCH_METRIC_TOLERANCE: paper(dim) plus the surface test in 3D.
     static MatchOptions defaults(int dim);
+    /// The paper's experiment (`--preset paper`): tab:parameters and its levels (4..8 in 3D,
+    /// 4..9 in 2D, sigma = 2h), and none of our additions that change the result (no surface
+    /// test, no landmarks). The paper gives no stopping rule, metric weight or refinement
+    /// margin: those are ours, as in defaults().
+    static MatchOptions paper(int dim);
     /// Throws openvdb::ValueError naming the first invalid field.
     void validate() const;
     /// validate(), and the levels within 1..maxMatchLevel(dim).

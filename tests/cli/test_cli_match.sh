@@ -201,6 +201,21 @@ assert lo < 0 < hi, (lo, hi)
 PY
 fi
 
+# ---------------------------------------------------------------- --preset paper: the paper's experiment
+check preset-unknown 1 '' "--preset expects 'default' or 'paper'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --preset fast --quiet
+check preset-paper 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/pp" --levels 3..4 --preset paper --quiet
+check preset-paper-override 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/ppo" --levels 3..4 --surface-tolerance 0.05 --preset paper --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/pp" "$SCRATCH/ppo" "$SCRATCH/m3" <<'PY'; then echo "ok   preset-report"; else fail "preset-report"; fi
+import json, sys
+paper, override, default = (json.load(open(d + "/report.json"))["parameters"] for d in sys.argv[1:])
+assert paper["preset"] == "paper" and paper["surfaceTolerance"] == 0, paper
+assert override["preset"] == "paper" and override["surfaceTolerance"] == 0.05, override
+assert default["preset"] == "default" and default["surfaceTolerance"] > 0, default
+# tab:parameters (3D): c_match 4.096, c_vol 0.8, c_mem 1, c_bend 0.2, q 4, theta 1
+assert (paper["cMatch"], paper["cVol"], paper["cMem"], paper["cBend"], paper["q"], paper["theta"]) == (4.096, 0.8, 1, 0.2, 4, 1), paper
+PY
+
 # ---------------------------------------------------------------- landmarks (an addition to the paper)
 if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then
     # Three points of each figure's outline (the hands and the head, roughly), as tables.

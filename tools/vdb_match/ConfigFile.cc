@@ -18,6 +18,7 @@ const std::vector<std::pair<const char*, const char*>>&
 configKeys()
 {
     static const std::vector<std::pair<const char*, const char*>> keys = {
+        {"preset", "--preset"},
         {"energy", "--energy"},
         {"cMatch", "--c-match"},
         {"cMem", "--c-mem"},

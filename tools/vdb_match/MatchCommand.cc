@@ -58,6 +58,7 @@ struct MatchCliOptions
     std::optional<int> minLevel, maxLevel;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     double tau = EnergyParameters().tau;
+    std::string preset = "default"; ///< --preset: "default" or "paper" (MatchOptions::paper)
     EnergyKind kind = EnergyKind::Symmetric;
     double margin = DEFAULT_UNIT_BOX_MARGIN;
     int hessianSmoothing = 0;
@@ -171,6 +172,15 @@ matchOptionTable()
          "extra width of the finest cells around the bands, in cells (default " +
              formatNumber(d.refinementMargin) + ")",
          [](O& o, const std::string& v) { o.refinementMargin = parseDouble("--refine-margin", v); }},
+        {"--preset", "NAME", "Energy (paper tab:parameters)",
+         "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
+         "our additions that change the result (no surface test, no landmarks unless given); "
+         "options given override it (default: default)",
+         [](O& o, const std::string& v) {
+             if (v != "default" && v != "paper")
+                 throw UsageError("--preset expects 'default' or 'paper', got '" + v + "'");
+             o.preset = v;
+         }},
         {"--energy", "KIND", "Energy (paper tab:parameters)",
          "symmetric (eq:Esym) or directional (eq:Ecomparison) (default symmetric)",
          [](O& o, const std::string& v) {
@@ -618,6 +628,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
         j["init"] = nullptr;
     }
     Json& params = j["parameters"];
+    params["preset"] = o.preset;
     params["energy"] = toString(opts.multiscale.kind);
     params.update(energyParametersJson(p));
     params.update(
@@ -717,7 +728,7 @@ int
 runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std::ostream& err)
 {
     const Clock::time_point start = Clock::now();
-    MatchOptions opts = MatchOptions::defaults(D);
+    MatchOptions opts = o.preset == "paper" ? MatchOptions::paper(D) : MatchOptions::defaults(D);
     EnergyParameters& p = opts.multiscale.energy;
     if (o.cMatch) p.cMatch = *o.cMatch;
     if (o.cMem) p.cMem = *o.cMem;
@@ -823,7 +834,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                       : opts.multiscale.maxLevel + 1;
     ProgressPrinter progress(err, o, D, opts.multiscale.maxLevel, firstSurfaceLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
-                     "D, " + toString(opts.multiscale.kind) + " energy, levels " +
+                     "D, " + (o.preset == "paper" ? "preset paper, " : "") +
+                     toString(opts.multiscale.kind) + " energy, levels " +
                      std::to_string(opts.multiscale.minLevel) + ".." +
                      std::to_string(opts.multiscale.maxLevel) +
                      (init ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) +
