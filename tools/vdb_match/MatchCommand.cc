@@ -24,7 +24,6 @@
 
 #include <openvdb/openvdb.h>
 #include <tbb/global_control.h>
-#include <tbb/task_group.h>
 
 #include <algorithm>
 #include <cctype>
@@ -547,28 +546,6 @@ private:
     int mFd = -1;
 };
 
-/// Output files written on background tasks. wait() rethrows the first failure; the destructor
-/// (on an exception of the caller) waits for the writes under way and drops their errors.
-class BackgroundWrites
-{
-public:
-    BackgroundWrites() = default;
-    BackgroundWrites(const BackgroundWrites&) = delete;
-    BackgroundWrites& operator=(const BackgroundWrites&) = delete;
-    ~BackgroundWrites()
-    {
-        try {
-            mGroup.wait();
-        } catch (...) {
-        }
-    }
-    template <typename F> void run(F&& f) { mGroup.run(std::forward<F>(f)); }
-    void wait() { mGroup.wait(); }
-
-private:
-    tbb::task_group mGroup;
-};
-
 /// What was written besides deformation.vdb, for report.json.
 struct ExtraOutputs
 {
@@ -898,40 +875,21 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformation->insertMeta("vdbmatch_min_jacobian", openvdb::DoubleMetadata(result.minJacobian));
     deformation->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
 
-    // Each file is written (atomically) on a background task as soon as its grid is ready, so
-    // that the serial compression and output of one overlaps the computation of the next.
-    const std::string dir = o.outDir;
-    openvdb::MetaMap fileMeta;
-    fileMeta.insertMeta("creator",
-                        openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
-    ExtraOutputs extra;
-    // Half floats keep 11 significant bits of each displacement: at fine levels that can flip a
-    // thin simplex. Store a grid in half only if its rounded values keep every det D > 0;
-    // otherwise keep float and say so.
-    auto chooseHalf = [&](openvdb::Vec3SGrid& grid, const std::string& name) {
-        if (!o.half) return;
-        const double minDet = minDeterminantAsHalf(grid);
-        if (minDet > 0) {
-            grid.setSaveFloatAsHalf(true);
-        } else {
-            progress.message("warning: --half would fold " + name + " (min det D " +
-                             fixed("%.3g", minDet) + " after rounding): written in float");
-            extra.halfRefused.push_back(name);
-        }
-    };
-    BackgroundWrites writes;
-    // A stale inverse or Jacobian of an earlier run must not sit next to this deformation.
-    for (const char* name : {"inverse.vdb", "jacobian.vdb"}) {
-        std::error_code removeError; // absent is fine
-        fs::remove(fs::path(dir) / name, removeError);
+    // The deformed shape as a level set, on the source's grid when it came as one.
+    openvdb::math::Transform::Ptr xform = in[0].transform;
+    if (!xform) {
+        const double voxel = placement.toWorldLength(std::ldexp(1.0, -result.lattice->level()));
+        xform = openvdb::math::Transform::createLinearTransform(voxel);
     }
-    chooseHalf(*deformation, "deformation.vdb");
-    writes.run([&] {
-        writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
-    });
-    extra.files.push_back("deformation.vdb");
+    openvdb::FloatGrid::Ptr deformed = levelSetFromSurface<D>(result.deformedSource, *xform, 3.0);
+    deformed->setName("surface");
+    deformed->setGridClass(openvdb::GRID_LEVEL_SET);
+    deformed->insertMeta("vdbmatch_version", openvdb::StringMetadata(VDBMATCH_VERSION));
+    deformed->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
+    deformed->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
 
     // The exact inverse at every node and det D phi per cell, from the grid as written.
+    ExtraOutputs extra;
     openvdb::Vec3SGrid::Ptr inverseGrid;
     openvdb::FloatGrid::Ptr jacobianGrid;
     if (!interrupted && (o.writeInverse || o.writeJacobian)) {
@@ -956,12 +914,6 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                      std::to_string(inv.failures) +
                                      " nodes (det D phi <= 0); inverse.vdb is wrong there");
                 }
-                chooseHalf(*inverseGrid, "inverse.vdb");
-                writes.run([&] {
-                    writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid},
-                                         fileMeta);
-                });
-                extra.files.push_back("inverse.vdb");
             }
         }
         if (o.writeJacobian && !wasSignalled()) {
@@ -976,32 +928,52 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                          openvdb::StringMetadata(VDBMATCH_VERSION));
                 jacobianGrid->insertMeta("vdbmatch_command",
                                          openvdb::StringMetadata(o.commandLine));
-                writes.run([&] {
-                    writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid},
-                                         fileMeta);
-                });
-                extra.files.push_back("jacobian.vdb");
+            }
+        }
+    }
+    if (o.half) {
+        // Half floats keep 11 significant bits of each displacement: at fine levels that can
+        // flip a thin simplex. Store a grid in half only if its rounded values keep every
+        // det D > 0; otherwise keep float and say so.
+        for (openvdb::Vec3SGrid::Ptr grid : {deformation, inverseGrid}) {
+            if (!grid) continue;
+            const double minDet = minDeterminantAsHalf(*grid);
+            if (minDet > 0) {
+                grid->setSaveFloatAsHalf(true);
+            } else {
+                progress.message(std::string("warning: --half would fold ") +
+                                 (grid == deformation ? "deformation.vdb" : "inverse.vdb") +
+                                 " (min det D " + fixed("%.3g", minDet) +
+                                 " after rounding): written in float");
+                extra.halfRefused.push_back(grid == deformation ? "deformation.vdb"
+                                                                : "inverse.vdb");
             }
         }
     }
 
-    // The deformed shape as a level set, on the source's grid when it came as one.
-    openvdb::math::Transform::Ptr xform = in[0].transform;
-    if (!xform) {
-        const double voxel = placement.toWorldLength(std::ldexp(1.0, -result.lattice->level()));
-        xform = openvdb::math::Transform::createLinearTransform(voxel);
+    const std::string dir = o.outDir;
+    openvdb::MetaMap fileMeta;
+    fileMeta.insertMeta("creator",
+                        openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
+    writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
+    extra.files.push_back("deformation.vdb");
+    // A stale inverse or Jacobian of an earlier run must not sit next to this deformation.
+    for (const char* name : {"inverse.vdb", "jacobian.vdb"}) {
+        std::error_code removeError; // absent is fine
+        fs::remove(fs::path(dir) / name, removeError);
     }
-    openvdb::FloatGrid::Ptr deformed = levelSetFromSurface<D>(result.deformedSource, *xform, 3.0);
-    deformed->setName("surface");
-    deformed->setGridClass(openvdb::GRID_LEVEL_SET);
-    deformed->insertMeta("vdbmatch_version", openvdb::StringMetadata(VDBMATCH_VERSION));
-    deformed->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
-    deformed->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
+    if (inverseGrid) {
+        writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid}, fileMeta);
+        extra.files.push_back("inverse.vdb");
+    }
+    if (jacobianGrid) {
+        writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid}, fileMeta);
+        extra.files.push_back("jacobian.vdb");
+    }
     writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
     writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
                         [&](std::ostream& os) { writeObj(os, result.deformedSource); });
     extra.files.insert(extra.files.end(), {"deformed.vdb", "deformed.obj", "report.json"});
-    writes.wait(); // rethrows the first failure of a background write
     const bool converged = last.status == solver::Status::Converged;
     const std::string status = interrupted ? "interrupted"
                                : converged ? "converged"
