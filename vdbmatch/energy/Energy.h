@@ -87,11 +87,13 @@ public:
     /// Smallest det D phi over all simplices (may be <= 0).
     Real minJacobianDeterminant(const NodeVectors<D>& u, bool threaded = true) const;
 
-    /// Cell culling of the inverse band (symmetric energy, on by default): d2 is sampled at the
-    /// centroid of every simplex of a cell only if a conservative bound (one sample of d2 at the
-    /// mean deformed corner, the 1-Lipschitz distance, the tier's interpolation slack) says the
-    /// cell may meet the band |d2 o phi| < sigma. The value and gradient are the same with and
-    /// without it (tests/energy/TestEnergy.cc compares them); the switch is for those tests.
+    /// Cell culling of the inverse band (symmetric energy; on by default in 3D, off in 2D): d2 is
+    /// sampled at the centroid of every simplex of a cell only if a conservative bound (one
+    /// sample of d2 at the mean deformed corner, the 1-Lipschitz distance, the tier's
+    /// interpolation slack) says the cell may meet the band |d2 o phi| < sigma. A 3D cell has 6
+    /// simplices; a 2D cell only 2, and there the extra sample cost more than it saved (the 2D
+    /// figure pair ran 8% faster without it, docs/performance.md). The value and gradient are
+    /// the same with and without it (tests/energy/TestEnergy.cc compares them, in 2D and 3D).
     void setCellCulling(bool on) { mCullCells = on; }
 
     /// Adds E_lm of @a landmarks (on the same lattice; must outlive the energy) to every
@@ -126,7 +128,7 @@ private:
     /// Slack of the culling bound, in voxels of the tier of shape 2 sampled at the cell: covers
     /// the interpolation error of that tier and of the finest one (both far below a voxel).
     static constexpr Real CULL_SLACK_VOXELS = 2;
-    bool mCullCells = true;
+    bool mCullCells = D == 3; ///< setCellCulling
     void cacheSourceGeometry();
     /// Frame of shape 1 at x: from the cache when the simplex is in the band of M1, sampled
     /// otherwise.
