@@ -19,6 +19,7 @@
 #
 # Usage: bench/bench_accuracy.sh [VDB_MATCH] [--pairs a,b,...] [--levels3d 4..7] [--levels2d 4..9]
 #            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
+#            [--resampled]
 #   VDB_MATCH   default build/tools/vdb_match/vdb_match
 #   --pairs     default all: creature_articulated, creature_swirl, creature_stretch,
 #               figure_articulated, figure_arms_up, figure_swirl, figure_stretch
@@ -31,6 +32,9 @@
 #               (--threads is also passed to consistency)
 #   --landmarks give vdb_match the pair's landmarks (make_pairs.py: 5 extremities of the source
 #               and their true images), forward A B and reverse B A
+#   --resampled match against the target sampled independently of the source (make_pairs.py
+#               target_resampled.*: re-meshed from its level set in 3D, resampled by arc length
+#               in 2D); the reverse error then carries g(v) through psi with `vdb_match apply`
 # Exit status: 0, or 1 with a message if generation, a match, consistency or scoring fails.
 set -euo pipefail
 
@@ -45,9 +49,11 @@ ENERGIES=symmetric,directional
 OUT=
 EXTRA=
 LANDMARKS=0
+RESAMPLED=0
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
+    --resampled) RESAMPLED=1; shift ;;
     --landmarks) LANDMARKS=1; shift ;;
     --pairs|--levels3d|--levels2d|--energies|--out|--extra)
       [ $# -ge 2 ] || die "$1 needs a value"
@@ -102,14 +108,15 @@ OUT=$(cd "$OUT" && pwd)
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -n1))"
-echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'$([ $LANDMARKS = 0 ] || echo '; landmarks')"
+echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'$([ $LANDMARKS = 0 ] || echo '; landmarks')$([ $RESAMPLED = 0 ] || echo '; resampled targets')"
 echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
 
 # --- pairs -----------------------------------------------------------------------------------
 missing=()
 for p in "${PAIR_LIST[@]}"; do
   if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ] \
-      || { [ $LANDMARKS = 1 ] && [ ! -f "$OUT/pairs/$p/landmarks_source.csv" ]; }; then
+      || { [ $LANDMARKS = 1 ] && [ ! -f "$OUT/pairs/$p/landmarks_source.csv" ]; } \
+      || { [ $RESAMPLED = 1 ] && ! ls "$OUT/pairs/$p"/target_resampled.* >/dev/null 2>&1; }; then
     missing+=("$p")
   fi
 done
@@ -152,16 +159,25 @@ for energy in "${ENERGY_LIST[@]}"; do
     rd=$OUT/runs/$p/$energy
     marks=()
     [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_source.csv" "$pd/landmarks_target.csv")
-    run_match "$pd/source.$ext" "$pd/target.$ext" "$rd/forward" "$levels" "$energy" "${marks[@]}"; fwall=$WALL
+    target=$pd/target.$ext
+    [ $RESAMPLED = 0 ] || target=$pd/target_resampled.$ext
+    run_match "$pd/source.$ext" "$target" "$rd/forward" "$levels" "$energy" "${marks[@]}"; fwall=$WALL
     [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_target.csv" "$pd/landmarks_source.csv")
-    run_match "$pd/target.$ext" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy" "${marks[@]}"; rwall=$WALL
+    run_match "$target" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy" "${marks[@]}"; rwall=$WALL
+    reverse_points=()
+    if [ $RESAMPLED = 1 ]; then  # psi(g(v)): the original target's vertices carried by psi
+      "$VDB_MATCH" apply "$rd/reverse/deformation.vdb" "$pd/target.$ext" -o "$rd/reverse/psi_of_g.$ext" \
+          "${THREAD_ARGS[@]}" >"$rd/reverse/apply.log" 2>&1 || { cat "$rd/reverse/apply.log" >&2; die "apply failed for $p"; }
+      reverse_points=(--reverse-points "$rd/reverse/psi_of_g.$ext")
+    fi
     "$VDB_MATCH" consistency "$rd/forward/deformation.vdb" "$rd/reverse/deformation.vdb" \
         --source "$pd/source.$ext" --target "$pd/target.$ext" --json "${THREAD_ARGS[@]}" \
         >"$rd/consistency.json" 2>"$rd/consistency.stderr" \
         || { cat "$rd/consistency.stderr" >&2; die "consistency failed for $p ($energy)"; }
     "$PYTHON" "$SCORE" --pair "$pd" --forward "$rd/forward" --reverse "$rd/reverse" \
         --consistency "$rd/consistency.json" --energy "$energy" --levels "$levels" \
-        --wall "$fwall" --reverse-wall "$rwall" --tsv "$TSV" || die "scoring failed for $p ($energy)"
+        --wall "$fwall" --reverse-wall "$rwall" --tsv "$TSV" "${reverse_points[@]}" \
+        || die "scoring failed for $p ($energy)"
   done
 done
 

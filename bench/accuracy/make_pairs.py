@@ -34,6 +34,9 @@ Maps g (3D and 2D each; see PAIRS)
 Output: one directory per pair, holding
   source.obj, target.obj (3D) or source.polyline, target.polyline (2D);
   truth.xyz: per source vertex (file order) g(v), world units, space separated;
+  target_resampled.obj / .polyline: the target sampled independently of the source's vertices
+             (3D: re-meshed from its level set at the mean edge length; 2D: resampled by arc
+             length with 7% fewer points, half a spacing off), for bench_accuracy.sh --resampled;
   landmarks_source.csv, landmarks_target.csv: 5 extremities of the source (farthest-point
              sampling from the vertex farthest from the centroid) and their images g(v), for
              vdb_match --landmarks (bench_accuracy.sh --landmarks);
@@ -530,6 +533,31 @@ def probe_grid(points, count):
 
 
 LANDMARKS = 5  # landmark pairs written per pair (bench_accuracy.sh --landmarks)
+RESAMPLE_FRACTION = 0.93  # 2D: points of the resampled target per source point
+
+
+def resampled_target(target, tris, edge):
+    """The target surface sampled independently of the source's vertices, as a scan of the posed
+    shape would be: 3D, the zero level set of the target mesh's signed distance (OpenVDB, voxel
+    = the mean edge length) meshed again; 2D, the closed curve resampled uniformly by arc length
+    with 7% fewer points, starting half a spacing off."""
+    if tris is None:
+        closed = np.vstack([target, target[:1]])
+        seg = np.linalg.norm(np.diff(closed, axis=0), axis=1)
+        s = np.concatenate([[0.0], np.cumsum(seg)])
+        count = int(round(RESAMPLE_FRACTION * len(target)))
+        t = (np.arange(count) + 0.5) * s[-1] / count
+        return np.stack([np.interp(t, s, closed[:, 0]), np.interp(t, s, closed[:, 1])], -1), None
+    import pyopenvdb as vdb
+    xform = vdb.createLinearTransform(voxelSize=float(edge))
+    grid = vdb.FloatGrid.createLevelSetFromPolygons(target.astype(np.float32),
+                                                    triangles=tris.astype(np.int32),
+                                                    transform=xform, halfWidth=3.0)
+    points, triangles, quads = grid.convertToPolygons(isovalue=0.0, adaptivity=0.0)
+    quads = np.asarray(quads, dtype=np.int64).reshape(-1, 4)
+    faces = np.concatenate([np.asarray(triangles, dtype=np.int64).reshape(-1, 3),
+                            quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]])
+    return np.asarray(points, dtype=float), faces
 
 
 def landmark_indices(points, count=LANDMARKS):
@@ -587,6 +615,16 @@ def make_pair(name, out_dir, shapes):
         write_polyline(os.path.join(d, "target.polyline"), target, name + " target = g(source)")
         seg = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
     write_atomic(os.path.join(d, "truth.xyz"), "".join(fmt_rows(target)))
+    # The target sampled independently (for point and mesh methods, which would otherwise read
+    # the correspondence off the shared sampling).
+    resampled, rtris = resampled_target(target, tris, seg.mean())
+    if dim == 3:
+        write_obj(os.path.join(d, "target_resampled.obj"), np.round(resampled, DECIMALS), rtris,
+                  name + " target, re-meshed from its level set")
+    else:
+        write_polyline(os.path.join(d, "target_resampled.polyline"),
+                       np.round(resampled, DECIMALS), name + " target, resampled by arc length")
+    info["resampledTargetVertices"] = int(len(resampled))
     # Landmarks for vdb_match --landmarks: extremities of the source and their true images.
     marks = landmark_indices(points)
     write_landmarks(os.path.join(d, "landmarks_source.csv"), points[marks])

@@ -69,6 +69,9 @@ def main():
     ap.add_argument("--wall", type=float)
     ap.add_argument("--reverse-wall", type=float)
     ap.add_argument("--tsv")
+    ap.add_argument("--reverse-points",
+                    help="psi(g(v)) in the order of the source's vertices (default: the reverse "
+                         "match's deformed.obj, when its source was target.obj)")
     a = ap.parse_args()
     if a.header:
         print(row(COLUMNS))
@@ -81,7 +84,7 @@ def main():
     truth = read_points(os.path.join(a.pair, "truth.xyz"), dim)
     fwd = json.load(open(os.path.join(a.forward, "report.json")))
     phi = read_points(os.path.join(a.forward, "deformed.obj"), dim)
-    psi_g = read_points(os.path.join(a.reverse, "deformed.obj"), dim)
+    psi_g = read_points(a.reverse_points or os.path.join(a.reverse, "deformed.obj"), dim)
     cons = json.load(open(a.consistency))
     if not (len(source) == len(truth) == len(phi) == len(psi_g)):
         fail("%s: vertex counts differ (source %d, truth %d, forward deformed %d, reverse "
