@@ -21,9 +21,9 @@
 #            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
 #            [--resampled]
 #   VDB_MATCH   default build/tools/vdb_match/vdb_match
-#   --pairs     default all: creature_articulated, creature_swirl, creature_stretch,
-#               figure_articulated, figure_arms_up, figure_swirl, figure_stretch
-#               (make_pairs.py --list)
+#   --pairs     default all: creature_articulated, creature_arm_up, creature_swirl,
+#               creature_stretch, figure_articulated, figure_arms_up, figure_swirl,
+#               figure_stretch (make_pairs.py --list)
 #   --levels3d  default 4..8 (the 3D default of vdb_match); --levels2d default 4..9
 #   --energies  default symmetric,directional
 #   --out DIR   keep pairs and outputs in DIR (pairs are regenerated only when missing or older
