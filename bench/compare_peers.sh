@@ -1,0 +1,170 @@
+#!/usr/bin/env bash
+# Point and mesh peers on the accuracy pairs (issue: correspondence): Bayesian Coherent Point
+# Drift (BCPD, github.com/ohirose/bcpd) and the AMM non-rigid registration of Yao et al.
+# (github.com/yaoyx689/AMM_NRR), each run as its users would, against the same known maps g as
+# bench/bench_accuracy.sh. Neither is packaged: build them yourself from their public sources
+# and give their binaries' paths; a peer without a path is skipped with a message. Not in CI.
+#
+# Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--out DIR]
+#   --pairs  default all (bench/accuracy/make_pairs.py --list)
+#   --bcpd   the bcpd binary (built with its makefile; needs OpenBLAS/LAPACK)
+#   --amm    the AMM_NRR binary (CMake; needs OpenMesh: Debian libopenmesh-dev); 3D only
+#   --out    keep pairs and outputs in DIR (pairs are reused as bench_accuracy.sh does)
+#
+# Each peer maps the source to the target sampled independently of it (make_pairs.py
+# target_resampled.*: re-meshed from its level set in 3D, resampled by arc length in 2D), so it
+# cannot read the correspondence off a shared vertex order; the error is |phi(v) - g(v)| over the
+# source's vertices, in unit-box units of vdb_match's placement of the two shapes (margin 0.2:
+# the union of their vertex boxes, largest side scaled to 0.6), so the numbers compare with
+# `bench_accuracy.sh --resampled`. Parameters, fixed once for every pair (not tuned per pair):
+#   BCPD  -w0 -l50 -b2 -g0.1 -ux -c1e-6 -n500 -r1 (the authors' Armadillo demo, with -g0.1 -ux,
+#         which their README recommends for shapes already roughly aligned), and in 3D its
+#         acceleration -J300 -K70 -p -f0.3 -DB,5000,0.02 as in that demo; X = target points,
+#         Y = source points, the output y.txt = phi(Y) in the source's order, world units.
+#   AMM   its defaults (radius 5, alpha 100, beta 10), source.obj -> target_resampled.obj; the
+#         output mesh keeps the source's vertex order.
+# Prints one row per pair and peer: err mean, err p95, wall seconds, peak memory (GNU time).
+set -euo pipefail
+
+die() { echo "compare_peers.sh: $*" >&2; exit 1; }
+usage() { sed -n '/^# Usage:/,/^#   --out/p' "$0" | sed 's/^# \{0,1\}//'; }
+
+PAIRS=all
+BCPD=
+AMM=
+OUT=
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -h|--help) usage; exit 0 ;;
+    --pairs|--bcpd|--amm|--out)
+      [ $# -ge 2 ] || die "$1 needs a value"
+      case "$1" in --pairs) PAIRS=$2 ;; --bcpd) BCPD=$2 ;; --amm) AMM=$2 ;; --out) OUT=$2 ;; esac
+      shift 2 ;;
+    *) usage >&2; die "unknown argument $1" ;;
+  esac
+done
+
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+PYTHON=python3
+[ -x /usr/bin/python3 ] && PYTHON=/usr/bin/python3
+MAKE_PAIRS=$ROOT/bench/accuracy/make_pairs.py
+[ -x /usr/bin/time ] || die "needs GNU time (apt-get install -y time)"
+[ -z "$BCPD" ] || [ -x "$BCPD" ] || die "--bcpd $BCPD is not an executable"
+[ -z "$AMM" ] || [ -x "$AMM" ] || die "--amm $AMM is not an executable"
+[ -n "$BCPD$AMM" ] || echo "compare_peers.sh: neither --bcpd nor --amm given: every peer is skipped"
+
+KEEP=1
+if [ -z "$OUT" ]; then
+  OUT=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-peers.XXXXXX")
+  KEEP=0
+  trap 'rm -rf "$OUT"' EXIT
+fi
+mkdir -p "$OUT"
+OUT=$(cd "$OUT" && pwd)
+[ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
+IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
+
+missing=()
+for p in "${PAIR_LIST[@]}"; do
+  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ] \
+      || ! ls "$OUT/pairs/$p"/target_resampled.* >/dev/null 2>&1; then
+    missing+=("$p")
+  fi
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  "$PYTHON" "$MAKE_PAIRS" "$OUT/pairs" --only "$(IFS=,; echo "${missing[*]}")" >"$OUT/make_pairs.log" 2>&1 \
+      || { cat "$OUT/make_pairs.log" >&2; die "make_pairs.py failed"; }
+fi
+
+# points FILE OUT: the vertices of an OBJ (v lines) or a polyline (x y lines), tab-separated.
+points() {
+  "$PYTHON" - "$1" "$2" <<'PY'
+import sys
+rows = []
+for line in open(sys.argv[1]):
+    parts = line.split()
+    if not parts or parts[0].startswith("#"):
+        continue
+    if parts[0] == "v":
+        rows.append(parts[1:4])
+    elif parts[0][0].isdigit() or parts[0][0] in "+-.":
+        rows.append(parts[:2])
+open(sys.argv[2], "w").write("".join("\t".join(r) + "\n" for r in rows))
+PY
+}
+
+# score PAIRDIR TARGET PHI_FILE PEER WALL RSS_KB: prints and appends one row.
+score() {
+  "$PYTHON" - "$@" "$OUT/results.tsv" <<'PY'
+import json, os, sys
+import numpy as np
+pair_dir, target, phi_file, peer, wall, rss, tsv = sys.argv[1:8]
+pair = json.load(open(os.path.join(pair_dir, "pair.json")))
+dim = pair["dimension"]
+def read(path):
+    pts = []
+    for line in open(path):
+        parts = line.split()
+        if not parts or parts[0].startswith("#"):
+            continue
+        if parts[0] == "v":
+            parts = parts[1:]
+        elif not (parts[0][0].isdigit() or parts[0][0] in "+-."):
+            continue
+        pts.append([float(x) for x in parts[:dim]])
+    return np.array(pts)
+source = read(os.path.join(pair_dir, "source." + ("obj" if dim == 3 else "polyline")))
+truth = read(os.path.join(pair_dir, "truth.xyz"))
+tgt = read(target)
+phi = read(phi_file)
+if len(phi) != len(source):
+    sys.exit("compare_peers.sh: %s on %s returned %d points for %d source vertices"
+             % (peer, pair["name"], len(phi), len(source)))
+both = np.vstack([source, tgt])
+scale = 0.6 / (both.max(axis=0) - both.min(axis=0)).max()  # vdb_match's placement, margin 0.2
+err = np.linalg.norm(phi - truth, axis=1) * scale
+motion = pair["motion"]["meanWorld"] * scale
+print("%-21s %-5s %9.2e %9.2e %9.2e %8.1f %8.0f" % (pair["name"], peer, err.mean(),
+      np.percentile(err, 95), motion, float(wall), int(rss) / 1024))
+new = not os.path.exists(tsv)
+with open(tsv, "a") as f:
+    if new:
+        f.write("pair\tdim\tpeer\terr_mean\terr_p95\tmotion_mean\twall_s\tpeak_mb\n")
+    f.write("%s\t%d\t%s\t%.6g\t%.6g\t%.6g\t%s\t%.0f\n" % (pair["name"], dim, peer, err.mean(),
+            np.percentile(err, 95), motion, wall, int(rss) / 1024))
+PY
+}
+
+rm -f "$OUT/results.tsv"
+echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
+printf '%-21s %-5s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
+for p in "${PAIR_LIST[@]}"; do
+  pd=$OUT/pairs/$p
+  dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
+  if [ "$dim" = 3 ]; then ext=obj; else ext=polyline; fi
+  target=$pd/target_resampled.$ext
+  rd=$OUT/runs/$p
+  mkdir -p "$rd"
+  if [ -n "$BCPD" ]; then
+    points "$target" "$rd/X.txt"
+    points "$pd/source.$ext" "$rd/Y.txt"
+    accel=()
+    [ "$dim" = 2 ] || accel=(-J300 -K70 -p -f0.3 -DB,5000,0.02)
+    ( cd "$rd" && /usr/bin/time -f '%e %M' -o bcpd.time "$BCPD" -x X.txt -y Y.txt -w0.0 -l50 -b2.0 \
+        -g0.1 -ux "${accel[@]}" -c1e-6 -n500 -r1 -o bcpd_ -sy >bcpd.log 2>&1 ) \
+        || { tail -n 5 "$rd/bcpd.log" >&2; die "bcpd failed on $p"; }
+    read -r wall rss <"$rd/bcpd.time"
+    score "$pd" "$target" "$rd/bcpd_y.txt" BCPD "$wall" "$rss"
+  fi
+  if [ -n "$AMM" ]; then
+    if [ "$dim" = 3 ]; then
+      ( cd "$rd" && /usr/bin/time -f '%e %M' -o amm.time "$AMM" "$pd/source.obj" "$target" "$rd/amm_" 5 100 10 \
+          >amm.log 2>&1 ) || { tail -n 5 "$rd/amm.log" >&2; die "AMM failed on $p"; }
+      read -r wall rss <"$rd/amm.time"
+      score "$pd" "$target" "$rd/amm_res.obj" AMM "$wall" "$rss"
+    else
+      printf '%-21s %-5s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
+    fi
+  fi
+done
+[ $KEEP = 0 ] || echo "results: $OUT/results.tsv"
