@@ -34,6 +34,8 @@ PAIRS = [
     ("J", "figure (2D)", "assets/figure_a.polyline", "assets/figure_b.polyline", "4..9", "4..5"),
 ]
 ENERGIES = [("dir", "directional"), ("sym", "symmetric")]
+# results.md from this line on is written by hand and kept when the script rewrites the file.
+HAND_WRITTEN = "<!-- Written by hand below this line; tools/run_experiment.py keeps it. -->"
 # The paper's tab:inverseError, as printed (fractions of the unit box): L2(Omega), Linf(Omega),
 # avg over M1, Linf over M1.
 PAPER = {
@@ -192,8 +194,15 @@ def write_markdown(args, rows, timings, figures, pictures):
         out.append("(none: run without --no-pictures)\n")
     for caption, name in figures:
         out.append(f"**{caption}**\n\n![{caption}](results/{name})\n")
+    # Sections written by hand after HAND_WRITTEN (discussion, peer comparisons) are kept.
+    kept = ""
+    if os.path.exists(args.output):
+        with open(args.output) as f:
+            previous = f.read()
+        if HAND_WRITTEN in previous:
+            kept = "\n" + previous[previous.index(HAND_WRITTEN):]
     with open(args.output, "w") as f:
-        f.write("\n".join(out) + "\n")
+        f.write("\n".join(out) + "\n" + kept)
 
 
 if __name__ == "__main__":
