@@ -226,7 +226,7 @@ matchOptionTable()
          "inputs. Adds the soft term c_lm/K sum |phi(a_k) - b_k|^2 (docs/numerics.md)",
          [](O& o, const std::string& v) { o.landmarkFiles.push_back(v); }},
         {"--landmark-weight", "X", "Landmarks (an addition to the paper)",
-         "c_lm, the weight of the landmark term, unit-box lengths (default " + formatNumber(d.landmarkWeight) + ")",
+         "c_lm, the weight of the landmark term (its distances in unit-box lengths) (default " + formatNumber(d.landmarkWeight) + ")",
          [](O& o, const std::string& v) { o.landmarkWeight = parseDouble("--landmark-weight", v); }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
