@@ -112,23 +112,8 @@ echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGI
 echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
 
 # --- pairs -----------------------------------------------------------------------------------
-missing=()
-for p in "${PAIR_LIST[@]}"; do
-  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ] \
-      || { [ $LANDMARKS = 1 ] && [ ! -f "$OUT/pairs/$p/landmarks_source.csv" ]; } \
-      || { [ $RESAMPLED = 1 ] && ! ls "$OUT/pairs/$p"/target_resampled.* >/dev/null 2>&1; }; then
-    missing+=("$p")
-  fi
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  start=$(date +%s.%N)
-  "$PYTHON" "$MAKE_PAIRS" "$OUT/pairs" --only "$(IFS=,; echo "${missing[*]}")" >"$OUT/make_pairs.log" 2>&1 \
-      || { cat "$OUT/make_pairs.log" >&2; die "make_pairs.py failed"; }
-  echo "pairs generated in $(awk -v a="$start" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }') s:"
-  sed -n 's/^/  /p' "$OUT/make_pairs.log"
-else
-  echo "pairs: reusing $OUT/pairs"
-fi
+source "$ROOT/bench/accuracy/ensure_pairs.sh"
+ensure_pairs "$OUT" "${PAIR_LIST[@]}"
 echo
 
 # --- matches ---------------------------------------------------------------------------------

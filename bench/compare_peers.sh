@@ -64,17 +64,8 @@ OUT=$(cd "$OUT" && pwd)
 [ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
 IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
 
-missing=()
-for p in "${PAIR_LIST[@]}"; do
-  if [ ! -f "$OUT/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$OUT/pairs/$p/pair.json" ] \
-      || ! ls "$OUT/pairs/$p"/target_resampled.* >/dev/null 2>&1; then
-    missing+=("$p")
-  fi
-done
-if [ ${#missing[@]} -gt 0 ]; then
-  "$PYTHON" "$MAKE_PAIRS" "$OUT/pairs" --only "$(IFS=,; echo "${missing[*]}")" >"$OUT/make_pairs.log" 2>&1 \
-      || { cat "$OUT/make_pairs.log" >&2; die "make_pairs.py failed"; }
-fi
+source "$ROOT/bench/accuracy/ensure_pairs.sh"
+ensure_pairs "$OUT" "${PAIR_LIST[@]}" >/dev/null
 
 # points FILE OUT: the vertices of an OBJ (v lines) or a polyline (x y lines), tab-separated.
 points() {
@@ -95,28 +86,18 @@ PY
 
 # score PAIRDIR TARGET PHI_FILE PEER WALL RSS_KB: prints and appends one row.
 score() {
-  "$PYTHON" - "$@" "$OUT/results.tsv" <<'PY'
+  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$@" "$OUT/results.tsv" <<'PY'
 import json, os, sys
 import numpy as np
 pair_dir, target, phi_file, peer, wall, rss, tsv = sys.argv[1:8]
+sys.path.insert(0, os.environ["ACCURACY_DIR"])
+from score import read_points  # noqa: E402  (bench/accuracy/score.py)
 pair = json.load(open(os.path.join(pair_dir, "pair.json")))
 dim = pair["dimension"]
-def read(path):
-    pts = []
-    for line in open(path):
-        parts = line.split()
-        if not parts or parts[0].startswith("#"):
-            continue
-        if parts[0] == "v":
-            parts = parts[1:]
-        elif not (parts[0][0].isdigit() or parts[0][0] in "+-."):
-            continue
-        pts.append([float(x) for x in parts[:dim]])
-    return np.array(pts)
-source = read(os.path.join(pair_dir, "source." + ("obj" if dim == 3 else "polyline")))
-truth = read(os.path.join(pair_dir, "truth.xyz"))
-tgt = read(target)
-phi = read(phi_file)
+source = read_points(os.path.join(pair_dir, "source." + ("obj" if dim == 3 else "polyline")), dim)
+truth = read_points(os.path.join(pair_dir, "truth.xyz"), dim)
+tgt = read_points(target, dim)
+phi = read_points(phi_file, dim)
 if len(phi) != len(source):
     sys.exit("compare_peers.sh: %s on %s returned %d points for %d source vertices"
              % (peer, pair["name"], len(phi), len(source)))

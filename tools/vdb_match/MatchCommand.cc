@@ -741,28 +741,6 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;
     opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
-    opts.validate();
-    if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
-        OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
-                                               << opts.multiscale.maxLevel << "], got "
-                                               << o.deformationLevel);
-    }
-
-    const Surface<D>& source = surfaceOf<D>(in[0]);
-    const Surface<D>& target = surfaceOf<D>(in[1]);
-    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
-    // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
-    // inputs) have voxels of 2^-level / scale: OpenVDB cannot represent them below its limit.
-    const double worldSpacing = placement.toWorldLength(std::ldexp(1.0, -opts.multiscale.maxLevel));
-    if (!(worldSpacing > MIN_WORLD_VOXEL_SIZE)) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "the shapes are too small in world units: the finest spacing, "
-                          << worldSpacing << " at level " << opts.multiscale.maxLevel
-                          << ", is not above " << MIN_WORLD_VOXEL_SIZE
-                          << ", the smallest voxel OpenVDB's transforms represent; rescale the "
-                             "inputs (e.g. to millimetres) or lower --max-level");
-    }
-
     // --landmarks A B: the same number of points in each, in world units of the inputs.
     if (!o.landmarkFiles.empty()) {
         if (o.landmarkFiles.size() != 2)
@@ -784,6 +762,26 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     }
     opts.landmarkWeight = o.landmarkWeight;
     opts.validate();
+    if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
+        OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
+                                               << opts.multiscale.maxLevel << "], got "
+                                               << o.deformationLevel);
+    }
+
+    const Surface<D>& source = surfaceOf<D>(in[0]);
+    const Surface<D>& target = surfaceOf<D>(in[1]);
+    const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
+    // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
+    // inputs) have voxels of 2^-level / scale: OpenVDB cannot represent them below its limit.
+    const double worldSpacing = placement.toWorldLength(std::ldexp(1.0, -opts.multiscale.maxLevel));
+    if (!(worldSpacing > MIN_WORLD_VOXEL_SIZE)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "the shapes are too small in world units: the finest spacing, "
+                          << worldSpacing << " at level " << opts.multiscale.maxLevel
+                          << ", is not above " << MIN_WORLD_VOXEL_SIZE
+                          << ", the smallest voxel OpenVDB's transforms represent; rescale the "
+                             "inputs (e.g. to millimetres) or lower --max-level");
+    }
 
     // --init: an earlier result of these inputs; the run starts after its finest level (or at
     // the last requested one), with cells no coarser than those of the requested first level.

@@ -1,8 +1,6 @@
 /// @file LandmarkTerm.cc
 #include "LandmarkTerm.h"
 
-#include <vdbmatch/multiscale/Prolongation.h>
-
 #include <openvdb/Exceptions.h>
 
 #include <algorithm>
@@ -48,14 +46,13 @@ LandmarkTerm<D>::LandmarkTerm(const SimplexLattice<D>& lattice, const LandmarkPa
             OPENVDB_THROW(openvdb::ValueError,
                           "landmarks: pair " << k + 1 << " has a coordinate that is not finite");
         }
-        typename multiscale::PiecewiseLinearInterpolator<D>::Location loc;
+        Location loc;
         if (!locator.locate(mSource[k], loc)) {
             OPENVDB_THROW(openvdb::ValueError, "landmarks: source point "
                                                    << k + 1 << " " << format<D>(mSource[k])
                                                    << " (unit box) lies outside the lattice");
         }
-        mNodes.push_back(loc.nodes);
-        mWeights.push_back(loc.weights);
+        mLocations.push_back(loc);
     }
 }
 
@@ -63,10 +60,7 @@ template <int D>
 Vec<D>
 LandmarkTerm<D>::mapped(const NodeVectors<D>& u, std::size_t k) const
 {
-    Vec<D> y = mSource[k];
-    for (int m = 0; m <= D; ++m)
-        if (mWeights[k][m] != 0) y += mWeights[k][m] * u.col(mNodes[k][m]);
-    return y;
+    return mSource[k] + multiscale::PiecewiseLinearInterpolator<D>::interpolate(u, mLocations[k]);
 }
 
 template <int D>
@@ -90,8 +84,9 @@ LandmarkTerm<D>::addGradient(const NodeVectors<D>& u, NodeVectors<D>& gradient) 
     for (std::size_t k = 0; k < mTarget.size(); ++k) {
         const Vec<D> r = mapped(u, k) - mTarget[k];
         sum += r.squaredNorm();
+        const Location& loc = mLocations[k];
         for (int m = 0; m <= D; ++m)
-            if (mWeights[k][m] != 0) gradient.col(mNodes[k][m]) += (2 * scale * mWeights[k][m]) * r;
+            if (loc.weights[m] != 0) gradient.col(loc.nodes[m]) += (2 * scale * loc.weights[m]) * r;
     }
     return scale * sum;
 }

@@ -21,9 +21,8 @@
 
 #include <vdbmatch/Types.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
+#include <vdbmatch/multiscale/Prolongation.h>
 
-#include <array>
-#include <cstdint>
 #include <vector>
 
 namespace vdbmatch {
@@ -60,8 +59,8 @@ public:
     void residual(const NodeVectors<D>& u, Real& mean, Real& max) const;
 
 private:
-    std::vector<std::array<int32_t, D + 1>> mNodes;
-    std::vector<std::array<Real, D + 1>> mWeights;
+    using Location = typename multiscale::PiecewiseLinearInterpolator<D>::Location;
+    std::vector<Location> mLocations; ///< the Kuhn simplex of each a_k and its weights
     std::vector<Vec<D>> mSource, mTarget;
     Real mWeight = 0;
 };

@@ -501,11 +501,10 @@ buildShapeSampler(const Surface<D>& surface, int level, const ShapeSamplerOption
                                                std::to_string(MIN_DISTANCE_LEVEL));
     }
     validate("buildShapeSampler", level, opts.bandHalfWidthVoxels);
-    if (cache.owner && cache.owner != &surface) {
+    if (!cache.claim(&surface)) {
         OPENVDB_THROW(openvdb::ValueError,
                       "buildShapeSampler: the cache holds the tiers of another surface");
     }
-    cache.owner = &surface;
     cache.dropBelow(level);
     ShapeFieldOptions fields = opts.fields;
     fields.threaded = fields.threaded && opts.threaded;

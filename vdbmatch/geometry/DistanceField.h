@@ -121,10 +121,16 @@ public:
         for (auto it = mTiers.begin(); it != mTiers.end();)
             it = it->first.first == 'b' && it->first.second < level - 2 ? mTiers.erase(it) : ++it;
     }
-    /// The surface and options the tiers were built for (set by the first use).
-    const void* owner = nullptr;
+    /// Binds the cache to @a surface on first use; false if it holds another surface's tiers.
+    bool claim(const void* surface)
+    {
+        if (mOwner && mOwner != surface) return false;
+        mOwner = surface;
+        return true;
+    }
 
 private:
+    const void* mOwner = nullptr;
     std::map<std::pair<char, int>, typename FieldSampler<D>::ConstPtr> mTiers;
 };
 

@@ -12,21 +12,6 @@
 namespace vdbmatch {
 namespace multiscale {
 
-namespace {
-
-/// The P1 interpolant at a located point (zero weights skipped, nodes in path order).
-template <int D, typename Location>
-Vec<D>
-weightedSum(const NodeVectors<D>& u, const Location& loc)
-{
-    Vec<D> v = Vec<D>::Zero();
-    for (int m = 0; m <= D; ++m)
-        if (loc.weights[m] != 0) v += loc.weights[m] * u.col(loc.nodes[m]);
-    return v;
-}
-
-} // namespace
-
 template <int D>
 PiecewiseLinearInterpolator<D>::PiecewiseLinearInterpolator(const SimplexLattice<D>& lattice)
     : mLattice(&lattice)
@@ -38,6 +23,16 @@ PiecewiseLinearInterpolator<D>::PiecewiseLinearInterpolator(const SimplexLattice
         if (!mCellIndex[s]) mCellIndex[s] = openvdb::Int32Grid::create(-1);
         mCellIndex[s]->tree().setValueOn(cells[ci].origin >> s, int32_t(ci));
     }
+}
+
+template <int D>
+Vec<D>
+PiecewiseLinearInterpolator<D>::interpolate(const NodeVectors<D>& u, const Location& loc)
+{
+    Vec<D> v = Vec<D>::Zero();
+    for (int m = 0; m <= D; ++m)
+        if (loc.weights[m] != 0) v += loc.weights[m] * u.col(loc.nodes[m]);
+    return v;
 }
 
 template <int D>
@@ -75,7 +70,7 @@ PiecewiseLinearInterpolator<D>::Cursor::evaluate(const NodeVectors<D>& u, const 
 {
     Location loc;
     if (!locate(x, loc)) return false;
-    value = weightedSum(u, loc);
+    value = interpolate(u, loc);
     return true;
 }
 
@@ -137,7 +132,7 @@ PiecewiseLinearInterpolator<D>::evaluate(const NodeVectors<D>& u, const Vec<D>& 
 {
     Location loc;
     if (!locate(x, loc)) return false;
-    value = weightedSum(u, loc);
+    value = interpolate(u, loc);
     return true;
 }
 

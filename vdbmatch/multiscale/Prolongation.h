@@ -58,6 +58,10 @@ public:
     /// cells: points on faces belong to every adjacent cell).
     bool locate(const Vec<D>& x, Location& loc) const;
 
+    /// The P1 interpolant of @a u (D x nodeCount) at a located point: sum_m weights[m] u(nodes[m]),
+    /// zero weights skipped (the same sum evaluate() forms).
+    static Vec<D> interpolate(const NodeVectors<D>& u, const Location& loc);
+
     /// Value of the piecewise-linear field @a u (D x nodeCount) at @a x; false (and @a value
     /// unchanged) if no cell contains x.
     bool evaluate(const NodeVectors<D>& u, const Vec<D>& x, Vec<D>& value) const;
