@@ -1,12 +1,15 @@
 /// @file BenchEnergy.cc
 /// @brief Throughput of the symmetric energy with gradient (simplices per second per thread) on
 ///        a 3D band around a sphere at h = 1/256, the 1 -> 2 thread speed-up, the value-only and
-///        directional variants, and the time to build the geometry fields.
+///        directional variants, the time to build the geometry fields, and the H^1 metric of the
+///        descent (building it, and one solve G^{-1} g at the match's CG tolerance).
 ///
 /// Run: build/bench/vdbmatch_bench_energy  (figures and their reading in docs/performance.md)
 #include "support/AnalyticShapes.h"
 
+#include <vdbmatch/Match.h>
 #include <vdbmatch/energy/Energy.h>
+#include <vdbmatch/solver/H1Metric.h>
 
 #include <benchmark/benchmark.h>
 #include <openvdb/openvdb.h>
@@ -153,6 +156,48 @@ BM_BuildLattice(benchmark::State& state)
         benchmark::DoNotOptimize(SimplexLattice<3>::fromCellMasks(LEVEL, {cells}).nodeCount());
 }
 BENCHMARK(BM_BuildLattice)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/// tau of the match at this level: DEFAULT_METRIC_TAU_FACTOR sigma^2, sigma = 2h.
+Real
+metricTau()
+{
+    const Real sigma = 2.0 / (1 << LEVEL);
+    return solver::DEFAULT_METRIC_TAU_FACTOR * sigma * sigma;
+}
+
+void
+BM_MetricBuild(benchmark::State& state)
+{
+    auto& P = problem();
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
+    solver::H1MetricOptions opts;
+    opts.method = solver::H1MetricOptions::Method::ConjugateGradient;
+    for (auto _ : state)
+        benchmark::DoNotOptimize(solver::H1Metric<3>(*P.lattice, metricTau(), opts).unknownCount());
+}
+BENCHMARK(BM_MetricBuild)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void
+BM_MetricSolve(benchmark::State& state)
+{
+    auto& P = problem();
+    tbb::global_control threads(tbb::global_control::max_allowed_parallelism, state.range(0));
+    solver::H1MetricOptions opts;
+    opts.method = solver::H1MetricOptions::Method::ConjugateGradient;
+    opts.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
+    const solver::H1Metric<3> metric(*P.lattice, metricTau(), opts);
+    Energy<3> E(*P.lattice, *P.shape1, *P.shape2, EnergyParameters::defaults(3),
+                EnergyKind::Symmetric);
+    NodeVectors<3> g, r;
+    E.valueAndGradient(P.u, g);
+    metric.zeroDirichlet(g);
+    int iterations = 0;
+    for (auto _ : state)
+        iterations = metric.applyInverse(g, r).iterations;
+    state.counters["unknowns"] = double(metric.unknownCount());
+    state.counters["cg_iterations"] = double(iterations);
+}
+BENCHMARK(BM_MetricSolve)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 } // namespace
 

@@ -352,7 +352,25 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
     std::vector<EnergyTerms> partial(L.blocks().size());
     NodeVectors<D> perSlot;
     // Each block zeroes its own slots inside the parallel loop (no serial pass over memory).
-    if constexpr (Grad) perSlot.resize(D, L.slotNodes().size());
+    if constexpr (Grad) {
+        {
+            std::unique_lock<std::mutex> lock(mSlotBufferMutex, std::try_to_lock);
+            if (lock.owns_lock()) perSlot.swap(mSlotBuffer);
+        }
+        perSlot.resize(D, L.slotNodes().size());
+    }
+    // Hands the buffer back for the next evaluation.
+    struct GiveBack
+    {
+        const Energy& energy;
+        NodeVectors<D>& buffer;
+        ~GiveBack()
+        {
+            if (buffer.size() == 0) return;
+            std::lock_guard<std::mutex> lock(energy.mSlotBufferMutex);
+            if (energy.mSlotBuffer.size() == 0) energy.mSlotBuffer.swap(buffer);
+        }
+    } giveBack{*this, perSlot};
     bool interrupted = false;
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {
         if (interrupter && interrupter->wasInterrupted()) {

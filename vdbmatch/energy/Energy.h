@@ -27,6 +27,7 @@
 
 #include <array>
 #include <cstddef>
+#include <mutex>
 #include <vector>
 
 namespace vdbmatch {
@@ -133,6 +134,12 @@ private:
     /// Frame of shape 1 at x: from the cache when the simplex is in the band of M1, sampled
     /// otherwise.
     void sourceFrame(std::size_t simplex, const Vec<D>& x, kinematics::SurfaceFrame<D>& f) const;
+
+    /// The per-slot gradient array of valueAndGradient, kept between evaluations so that a
+    /// descent does not allocate (and fault in) tens of MB per iteration. One buffer; an
+    /// evaluation that finds it taken (a concurrent one) allocates its own.
+    mutable std::mutex mSlotBufferMutex;
+    mutable NodeVectors<D> mSlotBuffer;
 
     const SimplexLattice<D>* mLattice;
     std::vector<int32_t> mSourceIndex; ///< per simplex (cell * SIMPLICES + p): index or -1

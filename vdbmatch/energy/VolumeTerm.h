@@ -18,7 +18,7 @@ volumeDirect(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
 {
     if constexpr (Grad) {
         Mat<D> G;
-        const Real e = math::W<D>(k.A, G);
+        const Real e = math::W<D>(k.A, k.J, k.C, G);
         grad->dA += c * G;
         return c * e;
     } else {
@@ -33,7 +33,9 @@ volumeInverse(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
 {
     if constexpr (Grad) {
         Mat<D> G;
-        const Real e = math::W<D>(k.B, G);
+        // det B = 1 / J and cof B = det B B^{-T} = A^T / J.
+        const Real invJ = 1.0 / k.J;
+        const Real e = math::W<D>(k.B, invJ, Mat<D>(k.A.transpose() * invJ), G);
         grad->dB += (c * k.J) * G;
         grad->dA += (c * e) * k.C;
         return c * e * k.J;

@@ -75,19 +75,28 @@ W(const Mat<D>& A)
 
 /// W of eq:Wbounded and dW/dA = |A|^{d-1} A + sqrt2 d^{(d-1)/2} (det A - 2)/sqrt(1+(det A-2)^2) cof
 /// A.
+/// W of eq:Wbounded and dW/dA, given A with its determinant and cofactor matrix (for callers
+/// that have them: the energy assembly knows det and cof of A and of A^{-1}).
+template <int D>
+inline Real
+W(const Mat<D>& A, Real detA, const Mat<D>& cofA, Mat<D>& dW)
+{
+    static const Real c = WboundedConstants<D>::detCoefficient();
+    static const Real off = WboundedConstants<D>::offset();
+    const Real s = A.squaredNorm();
+    const Real t = detA - 2.0;
+    const Real r = std::sqrt(1.0 + t * t);
+    dW = frobeniusPowerDm1<D>(s) * A + (c * t / r) * cofA;
+    return frobeniusPowerDp1<D>(s) / (D + 1) + c * r - off;
+}
+
 template <int D>
 inline Real
 W(const Mat<D>& A, Mat<D>& dW)
 {
-    static const Real c = WboundedConstants<D>::detCoefficient();
-    static const Real off = WboundedConstants<D>::offset();
     const Mat<D> C = cof(A);
     const Real detA = (A.col(0).transpose() * C.col(0)).value(); // Laplace expansion
-    const Real s = A.squaredNorm();
-    const Real t = detA - 2.0;
-    const Real r = std::sqrt(1.0 + t * t);
-    dW = frobeniusPowerDm1<D>(s) * A + (c * t / r) * C;
-    return frobeniusPowerDp1<D>(s) / (D + 1) + c * r - off;
+    return W<D>(A, detA, C, dW);
 }
 
 /// Inverse-deformation density 𝒲(A) = W(cof A^T / det A) |det A| (subsec:storedenergy).

@@ -1,12 +1,15 @@
 /// @file H1Metric.cc
 #include "H1Metric.h"
 
+#include <vdbmatch/Parallel.h>
+
 #include <openvdb/Exceptions.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace vdbmatch {
 namespace solver {
@@ -37,36 +40,6 @@ Real
 cellSide(const SimplexLattice<D>& lattice, const typename SimplexLattice<D>::Cell& cell)
 {
     return lattice.h() * Real(1 << cell.log2Size);
-}
-
-/// Runs body(cell, slots, perSlot) for every cell, accumulating per-slot D-vectors in
-/// @a perSlot (resized here; each block zeroes its own slots), then gathers them per node
-/// (deterministic: fixed block order, no atomics).
-template <int D, typename CellBody>
-void
-assemblePerNode(const SimplexLattice<D>& lattice, NodeVectors<D>& out, NodeVectors<D>& perSlot,
-                bool threaded, const CellBody& body)
-{
-    perSlot.resize(D, Eigen::Index(lattice.slotNodes().size()));
-    auto blocks = [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t b = r.begin(); b != r.end(); ++b) {
-            const auto& block = lattice.blocks()[b];
-            perSlot
-                .middleCols(Eigen::Index(block.slotBegin),
-                            Eigen::Index(block.slotEnd - block.slotBegin))
-                .setZero();
-            for (std::size_t ci = block.cellBegin; ci < block.cellEnd; ++ci) {
-                const int32_t* slots = lattice.cellSlots().data() + ci * SimplexLattice<D>::CORNERS;
-                body(lattice.cells()[ci], slots, perSlot);
-            }
-        }
-    };
-    const tbb::blocked_range<std::size_t> range(0, lattice.blocks().size(), 1);
-    if (threaded)
-        tbb::parallel_for(range, blocks);
-    else
-        blocks(range);
-    lattice.gatherSlots(perSlot, out, threaded);
 }
 
 /// Triplets of s^D massWeight M_ref + s^{D-2} stiffWeight L_ref over all cells, rows and
@@ -175,6 +148,7 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
         mFreeNodes.push_back(int32_t(i));
     }
 
+    assemble(threaded);
     bool direct = false;
     switch (opts.method) {
     case H1MetricOptions::Method::Direct:
@@ -197,35 +171,155 @@ H1Metric<D>::H1Metric(const SimplexLattice<D>& lattice, Real tau, const H1Metric
                                                    << unknownCount() << " unknowns)");
         return;
     }
+    // Jacobi preconditioner: the exact diagonal of P^T G P (positive: G is SPD, P injective).
+    mInverseDiagonal.setZero(Eigen::Index(unknownCount()));
+    for (std::size_t i = 0; i < unknownCount(); ++i)
+        for (std::size_t k = mRowBegin[i]; k < mRowBegin[i + 1]; ++k)
+            if (mColumns[k] == int32_t(i)) mInverseDiagonal[Eigen::Index(i)] = 1.0 / mValues[k];
+}
 
-    // Jacobi preconditioner: the diagonal of G, per node.
+template <int D>
+void
+H1Metric<D>::assemble(bool threaded)
+{
+    // Row i of P^T G P is sum over the nodes n with P_ni = w != 0 (the free node itself, w = 1,
+    // and the non-Dirichlet hanging nodes it masters) of w G_nm P_mj over the cells around n.
+    // Rows are built independently, each in a fixed order, then stored in row order.
+    constexpr int C = SimplexLattice<D>::CORNERS;
+    using CellMatrix = typename ReferenceCellMatrices<D>::Matrix;
+    const auto& L = *mLattice;
     const auto& ref = ReferenceCellMatrices<D>::get();
-    NodeVectors<D> diag, perSlot;
-    assemblePerNode<D>(lattice, diag, perSlot, threaded,
-                       [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
-                           NodeVectors<D>& acc) {
-                           const Real s = cellSide(lattice, cell);
-                           const Real sm = std::pow(s, D), sl = mTau * std::pow(s, D - 2);
-                           for (int a = 0; a < SimplexLattice<D>::CORNERS; ++a)
-                               acc.col(slots[a]).array() +=
-                                   sm * ref.mass(a, a) + sl * ref.stiffness(a, a);
-                       });
-    // Constrained space: diag(P^T G P) approximated by diag(G) on the free nodes plus
-    // w^2 G_hh from each hanging node h onto each of its masters m (weight w). Positive, so the
-    // preconditioner is SPD; the cross terms 2 w G_hm are left out.
-    const auto& hanging = lattice.hangingNodes();
-    for (std::size_t k = 0; k < hanging.size(); ++k) {
-        const auto hn = std::size_t(hanging[k]);
-        if (mDirichlet[hn]) continue;
-        for (std::size_t j = lattice.constraintOffsets()[k]; j < lattice.constraintOffsets()[k + 1];
-             ++j) {
-            const Real w = lattice.constraintWeights()[j];
-            diag(0, lattice.constraintMasters()[j]) += w * w * diag(0, hn);
-        }
+    const std::size_t n = L.nodeCount(), unknowns = unknownCount();
+
+    // The cell matrix depends only on the cell size: one per log2Size.
+    int maxLog2Size = 0;
+    for (const auto& cell : L.cells())
+        maxLog2Size = std::max(maxLog2Size, cell.log2Size);
+    std::vector<CellMatrix> K(std::size_t(maxLog2Size) + 1);
+    for (int s = 0; s <= maxLog2Size; ++s) {
+        const Real side = L.h() * Real(1 << s);
+        K[std::size_t(s)] =
+            std::pow(side, D) * ref.mass + mTau * std::pow(side, D - 2) * ref.stiffness;
     }
-    mInverseDiagonal.setZero(Eigen::Index(n));
+    // (cell, corner) pairs around each node, CSR.
+    std::vector<std::size_t> aroundBegin(n + 1, 0);
+    for (const auto& cell : L.cells())
+        for (int a = 0; a < C; ++a)
+            ++aroundBegin[std::size_t(cell.corners[a]) + 1];
     for (std::size_t i = 0; i < n; ++i)
-        if (mUnknown[i] >= 0) mInverseDiagonal[i] = 1.0 / diag(0, i);
+        aroundBegin[i + 1] += aroundBegin[i];
+    std::vector<int32_t> around(aroundBegin[n]);
+    {
+        std::vector<std::size_t> next(aroundBegin.begin(), aroundBegin.end() - 1);
+        for (std::size_t ci = 0; ci < L.cellCount(); ++ci)
+            for (int a = 0; a < C; ++a)
+                around[next[std::size_t(L.cells()[ci].corners[a])]++] = int32_t(ci * C + a);
+    }
+    // P row by row: node -> (unknown, weight) list, CSR (empty for the Dirichlet nodes).
+    std::vector<std::size_t> pBegin(n + 1, 0);
+    std::vector<int32_t> pUnknown;
+    std::vector<Real> pWeight;
+    pUnknown.reserve(n);
+    pWeight.reserve(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        if (mUnknown[i] >= 0) {
+            pUnknown.push_back(mUnknown[i]);
+            pWeight.push_back(1.0);
+        } else if (!mDirichlet[i] && L.isHangingNode(i)) {
+            const auto k = std::size_t(L.hangingIndex(i));
+            for (std::size_t j = L.constraintOffsets()[k]; j < L.constraintOffsets()[k + 1]; ++j) {
+                const int32_t m = mUnknown[std::size_t(L.constraintMasters()[j])];
+                if (m < 0) continue;
+                pUnknown.push_back(m);
+                pWeight.push_back(L.constraintWeights()[j]);
+            }
+        }
+        pBegin[i + 1] = pUnknown.size();
+    }
+    // P^T by columns: unknown -> (node, weight), the transpose of the lists above.
+    std::vector<std::size_t> tBegin(unknowns + 1, 0);
+    for (int32_t u : pUnknown)
+        ++tBegin[std::size_t(u) + 1];
+    for (std::size_t i = 0; i < unknowns; ++i)
+        tBegin[i + 1] += tBegin[i];
+    std::vector<int32_t> tNode(pUnknown.size());
+    std::vector<Real> tWeight(pUnknown.size());
+    {
+        std::vector<std::size_t> next(tBegin.begin(), tBegin.end() - 1);
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t k = pBegin[i]; k < pBegin[i + 1]; ++k) {
+                const std::size_t slot = next[std::size_t(pUnknown[k])]++;
+                tNode[slot] = int32_t(i);
+                tWeight[slot] = pWeight[k];
+            }
+    }
+
+    // Rows in fixed chunks; each chunk keeps its entries, then they are concatenated.
+    constexpr std::size_t ROWS_PER_CHUNK = 2048;
+    const std::size_t chunks = (unknowns + ROWS_PER_CHUNK - 1) / ROWS_PER_CHUNK;
+    std::vector<std::vector<int32_t>> chunkColumns(chunks);
+    std::vector<std::vector<Real>> chunkValues(chunks);
+    std::vector<std::size_t> rowLength(unknowns, 0);
+    detail::forEachIndex(chunks, threaded, [&](std::size_t c) {
+        // The row's (column, sum) pairs, in order of first appearance (a row has at most a few
+        // dozen columns: a linear search beats a map).
+        std::vector<std::pair<int32_t, Real>> rowEntries;
+        auto add = [&](int32_t col, Real value) {
+            for (auto& [column, sum] : rowEntries)
+                if (column == col) {
+                    sum += value;
+                    return;
+                }
+            rowEntries.emplace_back(col, value);
+        };
+        auto& cols = chunkColumns[c];
+        auto& vals = chunkValues[c];
+        // 15 columns per row on a uniform 3D lattice, more next to hanging nodes.
+        cols.reserve(ROWS_PER_CHUNK * (D == 3 ? 20 : 8));
+        vals.reserve(ROWS_PER_CHUNK * (D == 3 ? 20 : 8));
+        const std::size_t end = std::min(unknowns, (c + 1) * ROWS_PER_CHUNK);
+        for (std::size_t row = c * ROWS_PER_CHUNK; row < end; ++row) {
+            rowEntries.clear();
+            for (std::size_t t = tBegin[row]; t < tBegin[row + 1]; ++t) {
+                const auto node = std::size_t(tNode[t]);
+                const Real w = tWeight[t];
+                for (std::size_t q = aroundBegin[node]; q < aroundBegin[node + 1]; ++q) {
+                    const std::size_t ci = std::size_t(around[q]) / C;
+                    const int a = around[q] % C;
+                    const auto& cell = L.cells()[ci];
+                    const CellMatrix& Kc = K[std::size_t(cell.log2Size)];
+                    for (int b = 0; b < C; ++b) {
+                        if (!comparable(a, b)) continue;
+                        const auto m = std::size_t(cell.corners[b]);
+                        const Real wk = w * Kc(a, b);
+                        for (std::size_t k = pBegin[m]; k < pBegin[m + 1]; ++k)
+                            add(pUnknown[k], wk * pWeight[k]);
+                    }
+                }
+            }
+            // Sorted by column; equal columns summed in the order of generation.
+            std::sort(rowEntries.begin(), rowEntries.end());
+            std::size_t length = 0;
+            for (const auto& [col, sum] : rowEntries) {
+                cols.push_back(col);
+                vals.push_back(sum);
+                ++length;
+            }
+            rowLength[row] = length;
+        }
+    });
+    mRowBegin.assign(unknowns + 1, 0);
+    for (std::size_t i = 0; i < unknowns; ++i)
+        mRowBegin[i + 1] = mRowBegin[i] + rowLength[i];
+    mColumns.resize(mRowBegin[unknowns]);
+    mValues.resize(mRowBegin[unknowns]);
+    detail::forEachIndex(chunks, threaded, [&](std::size_t c) {
+        const std::size_t begin = mRowBegin[c * ROWS_PER_CHUNK];
+        std::copy(chunkColumns[c].begin(), chunkColumns[c].end(),
+                  mColumns.begin() + std::ptrdiff_t(begin));
+        std::copy(chunkValues[c].begin(), chunkValues[c].end(),
+                  mValues.begin() + std::ptrdiff_t(begin));
+    });
 }
 
 template <int D> H1Metric<D>::~H1Metric() = default;
@@ -234,30 +328,33 @@ template <int D>
 SparseMatrix
 H1Metric<D>::matrix() const
 {
-    const auto& L = *mLattice;
-    if (L.hangingNodeCount() == 0) return assemble<D>(L, 1.0, mTau, &mUnknown, unknownCount());
-    // P^T G P with G on every node and P: free unknowns -> nodes (identity on the free nodes,
-    // the resolved constraints on the non-Dirichlet hanging nodes, 0 on the Dirichlet nodes).
-    const SparseMatrix G = assemble<D>(L, 1.0, mTau, nullptr, L.nodeCount());
+    const auto n = Eigen::Index(unknownCount());
     std::vector<Eigen::Triplet<Real>> triplets;
-    triplets.reserve(mFreeNodes.size() + L.constraintMasters().size());
-    for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
-        triplets.emplace_back(mFreeNodes[k], int32_t(k), 1.0);
-    const auto& hanging = L.hangingNodes();
-    for (std::size_t k = 0; k < hanging.size(); ++k) {
-        if (mDirichlet[std::size_t(hanging[k])]) continue;
-        for (std::size_t j = L.constraintOffsets()[k]; j < L.constraintOffsets()[k + 1]; ++j) {
-            const int32_t m = mUnknown[std::size_t(L.constraintMasters()[j])];
-            if (m >= 0) triplets.emplace_back(hanging[k], m, L.constraintWeights()[j]);
-        }
-    }
-    SparseMatrix P(Eigen::Index(L.nodeCount()), Eigen::Index(unknownCount()));
-    P.setFromTriplets(triplets.begin(), triplets.end());
-    const SparseMatrix GP = G * P;
-    SparseMatrix A = SparseMatrix(P.transpose()) * GP;
-    // Exactly symmetric (the two products round differently).
+    triplets.reserve(mColumns.size());
+    for (std::size_t i = 0; i < unknownCount(); ++i)
+        for (std::size_t k = mRowBegin[i]; k < mRowBegin[i + 1]; ++k)
+            triplets.emplace_back(int32_t(i), mColumns[k], mValues[k]);
+    SparseMatrix A(n, n);
+    A.setFromTriplets(triplets.begin(), triplets.end());
+    // Exactly symmetric (entries ij and ji are summed in different orders).
     A = 0.5 * (A + SparseMatrix(A.transpose()));
     return A;
+}
+
+template <int D>
+void
+H1Metric<D>::multiply(const NodeVectors<D>& x, NodeVectors<D>& y, bool threaded) const
+{
+    y.resize(D, x.cols());
+    detail::forEachIndex((unknownCount() + CG_CHUNK - 1) / CG_CHUNK, threaded, [&](std::size_t c) {
+        const std::size_t end = std::min(unknownCount(), (c + 1) * std::size_t(CG_CHUNK));
+        for (std::size_t i = c * std::size_t(CG_CHUNK); i < end; ++i) {
+            Vec<D> sum = Vec<D>::Zero();
+            for (std::size_t k = mRowBegin[i]; k < mRowBegin[i + 1]; ++k)
+                sum += mValues[k] * x.col(mColumns[k]);
+            y.col(Eigen::Index(i)) = sum;
+        }
+    });
 }
 
 template <int D>
@@ -290,53 +387,14 @@ template <int D>
 void
 H1Metric<D>::apply(const NodeVectors<D>& v, NodeVectors<D>& out, bool threaded) const
 {
-    NodeVectors<D> perSlot, expanded;
-    apply(v, out, perSlot, expanded, threaded);
-}
-
-template <int D>
-void
-H1Metric<D>::apply(const NodeVectors<D>& vIn, NodeVectors<D>& out, NodeVectors<D>& perSlot,
-                   NodeVectors<D>& expanded, bool threaded) const
-{
-    const bool hasHanging = mLattice->hangingNodeCount() > 0;
-    if (hasHanging) {
-        // P v: the free values of v, interpolated at the hanging nodes.
-        expanded = vIn;
-        project(expanded);
-    }
-    const NodeVectors<D>& v = hasHanging ? expanded : vIn;
-    constexpr int C = SimplexLattice<D>::CORNERS;
-    using CellMatrix = typename ReferenceCellMatrices<D>::Matrix;
-    const auto& ref = ReferenceCellMatrices<D>::get();
-    const auto& L = *mLattice;
-    // The cell matrix depends only on the cell size: one per log2Size.
-    int maxLog2Size = 0;
-    for (const auto& cell : L.cells())
-        maxLog2Size = std::max(maxLog2Size, cell.log2Size);
-    std::vector<CellMatrix> K(std::size_t(maxLog2Size) + 1);
-    for (int s = 0; s <= maxLog2Size; ++s) {
-        const Real side = L.h() * Real(1 << s);
-        K[s] = std::pow(side, D) * ref.mass + mTau * std::pow(side, D - 2) * ref.stiffness;
-    }
-    assemblePerNode<D>(L, out, perSlot, threaded,
-                       [&](const typename SimplexLattice<D>::Cell& cell, const int32_t* slots,
-                           NodeVectors<D>& acc) {
-                           Eigen::Matrix<Real, D, C> local;
-                           for (int a = 0; a < C; ++a) {
-                               const int32_t node = cell.corners[a];
-                               if (!mDirichlet[node])
-                                   local.col(a) = v.col(node);
-                               else
-                                   local.col(a).setZero();
-                           }
-                           const Eigen::Matrix<Real, D, C> product = local * K[cell.log2Size];
-                           for (int a = 0; a < C; ++a)
-                               acc.col(slots[a]) += product.col(a);
-                       });
-    // P^T (G P v), restricted to the free nodes.
-    if (hasHanging) mLattice->reduce(out);
-    zeroDirichlet(out);
+    const auto u = Eigen::Index(unknownCount());
+    NodeVectors<D> x(D, u), y;
+    for (Eigen::Index k = 0; k < u; ++k)
+        x.col(k) = v.col(mFreeNodes[std::size_t(k)]);
+    multiply(x, y, threaded);
+    out.setZero(D, v.cols());
+    for (Eigen::Index k = 0; k < u; ++k)
+        out.col(mFreeNodes[std::size_t(k)]) = y.col(k);
 }
 
 template <int D>
@@ -350,48 +408,51 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
                                                << n << " node values, got " << gIn.cols());
     const bool warm = initialGuess && !mFactor && initialGuess->rows() == D &&
                       std::size_t(initialGuess->cols()) == n;
+    const auto u = Eigen::Index(unknownCount());
+    NodeVectors<D> x(D, u);
     if (warm) {
-        if (initialGuess != &out) out = *initialGuess;
-    } else {
-        out.setZero(D, Eigen::Index(n));
+        for (Eigen::Index k = 0; k < u; ++k)
+            x.col(k) = initialGuess->col(mFreeNodes[std::size_t(k)]);
     }
-    if (unknownCount() == 0) return {};
-    // P^T g: the hanging nodes' co-vector entries moved to their masters.
-    const bool hasHanging = mLattice->hangingNodeCount() > 0;
-    NodeVectors<D> reduced;
-    if (hasHanging) {
-        reduced = gIn;
+    out.setZero(D, Eigen::Index(n));
+    if (u == 0) return {};
+    // b = P^T g on the unknowns: the hanging nodes' co-vector entries moved to their masters.
+    NodeVectors<D> b(D, u);
+    if (mLattice->hangingNodeCount() > 0) {
+        NodeVectors<D> reduced = gIn;
         zeroDirichlet(reduced);
         mLattice->reduce(reduced);
+        for (Eigen::Index k = 0; k < u; ++k)
+            b.col(k) = reduced.col(mFreeNodes[std::size_t(k)]);
+    } else {
+        for (Eigen::Index k = 0; k < u; ++k)
+            b.col(k) = gIn.col(mFreeNodes[std::size_t(k)]);
     }
-    const NodeVectors<D>& g = hasHanging ? reduced : gIn;
     MetricSolveInfo info;
     if (!mFactor) {
-        info = solveCg(g, out, threaded, warm);
+        info = solveCg(b, x, threaded, warm);
     } else {
         // All D components with one factorisation: right-hand sides as the columns of B.
-        Eigen::Matrix<Real, Eigen::Dynamic, D> B(Eigen::Index(unknownCount()), D);
-        for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
-            B.row(Eigen::Index(k)) = g.col(mFreeNodes[k]).transpose();
-        const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(B);
-        for (std::size_t k = 0; k < mFreeNodes.size(); ++k)
-            out.col(mFreeNodes[k]) = X.row(Eigen::Index(k)).transpose();
+        const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(b.transpose());
+        x = X.transpose();
     }
+    for (Eigen::Index k = 0; k < u; ++k)
+        out.col(mFreeNodes[std::size_t(k)]) = x.col(k);
     // P x: interpolated at the hanging nodes (0 at the Dirichlet nodes).
-    if (hasHanging) project(out);
+    if (mLattice->hangingNodeCount() > 0) project(out);
     return info;
 }
 
 template <int D>
 MetricSolveInfo
-H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded, bool warm) const
+H1Metric<D>::solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, bool threaded, bool warm) const
 {
-    // Jacobi-preconditioned CG, the D components iterated together (one operator application
-    // per iteration serves all of them); a converged component is frozen. The vector updates
-    // are fused into two passes over the nodes, in parallel over fixed chunks whose partial sums
-    // are added in chunk order (independent of the thread count).
+    // Jacobi-preconditioned CG, the D components iterated together (one product per iteration
+    // serves all of them); a converged component is frozen. The vector updates are fused into
+    // passes over the unknowns, in parallel over fixed chunks whose partial sums are added in
+    // chunk order (independent of the thread count).
     using Col = Vec<D>;
-    const Eigen::Index n = x.cols();
+    const Eigen::Index n = Eigen::Index(unknownCount());
     const Eigen::Index chunks = (n + CG_CHUNK - 1) / CG_CHUNK;
     std::vector<Eigen::Matrix<Real, D, 3>> partial(static_cast<std::size_t>(chunks));
     // Runs body(begin, end, partialSums) per chunk; returns the D x 3 sums in chunk order.
@@ -412,36 +473,46 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded, 
             sum += p;
         return sum;
     };
+    // q.col(i) = (A v).col(i) for i in [begin, end).
+    auto product = [&](const NodeVectors<D>& v, NodeVectors<D>& q, Eigen::Index begin,
+                       Eigen::Index end) {
+        for (Eigen::Index i = begin; i < end; ++i) {
+            Col sum = Col::Zero();
+            for (std::size_t k = mRowBegin[std::size_t(i)]; k < mRowBegin[std::size_t(i) + 1]; ++k)
+                sum += mValues[k] * v.col(mColumns[k]);
+            q.col(i) = sum;
+        }
+    };
     const auto& invDiag = mInverseDiagonal;
-    NodeVectors<D> r(D, n), z(D, n), p(D, n), q, perSlot, expanded;
-    // |b|: the norm of g on the free nodes (the tolerance is relative to it, warm or not).
-    const Col bNorm = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
-                          for (Eigen::Index i = b; i < e; ++i)
-                              if (invDiag[i] != 0) acc.col(0) += g.col(i).cwiseProduct(g.col(i));
+    NodeVectors<D> r(D, n), z(D, n), p(D, n), q(D, n);
+    // |b|: the tolerance is relative to it, warm or not.
+    const Col bNorm = pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>& acc) {
+                          for (Eigen::Index i = i0; i < i1; ++i)
+                              acc.col(0) += b.col(i).cwiseProduct(b.col(i));
                       })
                           .col(0)
                           .cwiseSqrt();
-    // Warm start: x0 = the guess on the free nodes (0 elsewhere, and in a component whose
-    // right-hand side is 0), q = A x0 (G acts on each component separately).
+    // Warm start: x0 = the guess (0 in a component whose right-hand side is 0), q = A x0 (A acts
+    // on each component separately).
     if (warm) {
         Col keep;
         for (int c = 0; c < D; ++c)
             keep[c] = bNorm[c] > 0 ? 1.0 : 0.0;
-        pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>&) {
-            for (Eigen::Index i = b; i < e; ++i) {
-                if (invDiag[i] == 0)
-                    x.col(i).setZero();
-                else
-                    x.col(i) = x.col(i).cwiseProduct(keep);
-            }
+        pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>&) {
+            for (Eigen::Index i = i0; i < i1; ++i)
+                x.col(i) = x.col(i).cwiseProduct(keep);
         });
-        apply(x, q, perSlot, expanded, threaded);
+        pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>&) {
+            product(x, q, i0, i1);
+        });
+    } else {
+        x.setZero(D, n);
     }
-    // r = g - A x0 (Dirichlet entries 0), z = p = D^{-1} r; sums: |r|^2, r.z
-    auto sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
-        for (Eigen::Index i = b; i < e; ++i) {
-            r.col(i) = invDiag[i] != 0 ? Col(g.col(i)) : Col::Zero();
-            if (warm && invDiag[i] != 0) r.col(i) -= q.col(i);
+    // r = b - A x0, z = p = D^{-1} r; sums: |r|^2, r.z
+    auto sums = pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>& acc) {
+        for (Eigen::Index i = i0; i < i1; ++i) {
+            r.col(i) = b.col(i);
+            if (warm) r.col(i) -= q.col(i);
             z.col(i) = invDiag[i] * r.col(i);
             p.col(i) = z.col(i);
             acc.col(0) += r.col(i).cwiseProduct(r.col(i));
@@ -457,16 +528,17 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded, 
         return true;
     };
     while (!allDone() && info.iterations < mOpts.cgMaxIterations) {
-        apply(p, q, perSlot, expanded, threaded);
-        const Col pq = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
-                           for (Eigen::Index i = b; i < e; ++i)
+        // q = A p and p.q in one pass.
+        const Col pq = pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>& acc) {
+                           product(p, q, i0, i1);
+                           for (Eigen::Index i = i0; i < i1; ++i)
                                acc.col(0) += p.col(i).cwiseProduct(q.col(i));
                        }).col(0);
         Col alpha;
         for (int c = 0; c < D; ++c)
             alpha[c] = done(c) || !(pq[c] > 0) ? 0.0 : rz[c] / pq[c];
-        sums = pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>& acc) {
-            for (Eigen::Index i = b; i < e; ++i) {
+        sums = pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>& acc) {
+            for (Eigen::Index i = i0; i < i1; ++i) {
                 x.col(i) += alpha.cwiseProduct(p.col(i));
                 r.col(i) -= alpha.cwiseProduct(q.col(i));
                 z.col(i) = invDiag[i] * r.col(i);
@@ -479,8 +551,8 @@ H1Metric<D>::solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded, 
         for (int c = 0; c < D; ++c)
             beta[c] = rz[c] > 0 ? sums(c, 1) / rz[c] : 0.0;
         rz = sums.col(1);
-        pass([&](Eigen::Index b, Eigen::Index e, Eigen::Matrix<Real, D, 3>&) {
-            for (Eigen::Index i = b; i < e; ++i)
+        pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>&) {
+            for (Eigen::Index i = i0; i < i1; ++i)
                 p.col(i) = z.col(i) + beta.cwiseProduct(p.col(i));
         });
         ++info.iterations;

@@ -14,9 +14,7 @@
 /// Dirichlet nor hanging); a vector of unknowns x stands for the continuous P1 field P x
 /// (SimplexLattice::expand), and the metric on this constrained space is
 /// @f[ \langle x, y\rangle = (P x)^T G (P y) = x^T (P^T G P) y. @f]
-/// apply() computes P^T G P x (= reduce(G expand(x))); the direct method factorises P^T G P
-/// (assembled sparse); the CG preconditioner uses diag(G) on the free nodes plus w^2 G_hh added
-/// to each master m of a hanging node h (weight w), an SPD approximation of diag(P^T G P).
+/// apply() computes P^T G P x (= reduce(G expand(x))) with the assembled matrix below.
 /// applyInverse() takes the full co-vector g (every node, as Energy::valueAndGradient returns
 /// it), solves (P^T G P) x = P^T g and returns P x (hanging columns interpolated, Dirichlet 0),
 /// so that pairing(g, out) = (P^T g).x. On lattices without hanging nodes P is the identity on
@@ -36,17 +34,19 @@
 /// problems): factors 0.125 to 8 give final energies within 0.5% of each other; 0.5 gave the
 /// lowest, 0.125 the cheapest metric solves (half the CG iterations).
 ///
-/// Two solvers for G^{-1}, selected by H1MetricOptions::method:
-/// - Direct: Eigen::SimplicialLDLT of G on the interior nodes (AMD ordering), factorised once
-///   when the metric is built and reused for every call and every component. Exact.
-/// - ConjugateGradient: matrix-free, Jacobi-preconditioned CG on all D components at once,
-///   applying G cell by cell in parallel over the lattice blocks (no matrix stored). Because
-///   tau = O(h^2), G is spectrally equivalent to the mass matrix and the iteration count does
-///   not grow with the level: 28 (2D) to 32 (3D) iterations for a relative residual of 1e-6
-///   with the default tau (16 with tau = sigma^2/8).
+/// P^T G P is assembled once, when the metric is built: a compressed-row matrix on the unknowns,
+/// one row per free node, built in parallel over the rows from the cells around the node and
+/// around the hanging nodes it masters (each row summed in a fixed order, so the matrix does not
+/// depend on the thread count). Two solvers for G^{-1}, selected by H1MetricOptions::method:
+/// - Direct: Eigen::SimplicialLDLT of that matrix (AMD ordering), factorised once and reused for
+///   every call and every component. Exact.
+/// - ConjugateGradient: Jacobi-preconditioned CG (the exact diagonal of P^T G P) on all D
+///   components at once, one sparse product per iteration in parallel over fixed row chunks.
+///   Because tau = O(h^2), G is spectrally equivalent to the mass matrix and the iteration count
+///   does not grow with the level.
 /// Auto factorises up to DEFAULT_DIRECT_MAX_UNKNOWNS_2D / _3D interior nodes and uses CG beyond.
-/// Measured on dense lattices (Release, 2 cores; factorisation time and peak memory, then time
-/// per solve of all D components, CG at 1e-6):
+/// Measured on dense lattices (Release, 2 cores, with the earlier matrix-free CG; factorisation
+/// time and peak memory, then time per solve of all D components, CG at 1e-6):
 ///   2D level 8,   65k unknowns: LDLT 0.35 s,  92 MB, 0.024 s/solve; CG 0.033 s/solve
 ///   2D level 9,  261k unknowns: LDLT 2.3 s,  273 MB, 0.12 s/solve;  CG 0.16 s/solve
 ///   2D level 10,  1M unknowns: LDLT 45 s,  1.1 GB, 0.66 s/solve;  CG 0.83 s/solve, 300 MB
@@ -54,9 +54,8 @@
 ///   3D level 5,   30k unknowns: LDLT 8.5 s,  194 MB, 0.15 s/solve;  CG 0.06 s/solve
 ///   3D level 6,  250k unknowns: LDLT > 10 min (stopped);            CG 0.50 s/solve, 123 MB
 ///   3D level 7,  2.0M unknowns: LDLT not feasible (fill ~ n^{4/3});  CG 4.6 s/solve, 715 MB
-/// (the 3D fill of SimplicialLDLT makes it useless beyond level 4). In 3D one CG solve costs
-/// about 2-3 energy-gradient evaluations of the same lattice: the metric is about half of the
-/// descent's time there.
+/// (the 3D fill of SimplicialLDLT makes it useless beyond level 4). The assembled product is
+/// several times cheaper than the matrix-free one it replaced (docs/performance.md).
 ///
 /// Thread-safety: a built metric is immutable; apply() and applyInverse() may be called
 /// concurrently. Results do not depend on the number of threads.
@@ -176,19 +175,23 @@ public:
     /// guesses; never for co-vectors (gradients).
     void project(NodeVectors<D>& v) const;
 
-    /// P^T G P on the free nodes (unknown numbering), assembled at each call (the direct method
-    /// factorises it once, at construction; CG never assembles it).
+    /// P^T G P on the free nodes (unknown numbering), exactly symmetric (a copy of the assembled
+    /// matrix, averaged with its transpose).
     SparseMatrix matrix() const;
+
+    /// Stored entries of P^T G P (the compressed-row matrix CG multiplies by).
+    std::size_t nonZeroCount() const { return mColumns.size(); }
 
 private:
     using Factor = Eigen::SimplicialLDLT<SparseMatrix>;
 
-    /// Solves for x; starts from x's free-node values if @a warm, else from 0.
-    MetricSolveInfo solveCg(const NodeVectors<D>& g, NodeVectors<D>& x, bool threaded,
+    /// Builds mRowBegin, mColumns, mValues: P^T G P in compressed rows over the unknowns.
+    void assemble(bool threaded);
+    /// y = (P^T G P) x on unknown vectors (D x unknownCount).
+    void multiply(const NodeVectors<D>& x, NodeVectors<D>& y, bool threaded) const;
+    /// Solves (P^T G P) x = b on unknown vectors; starts from x if @a warm, else from 0.
+    MetricSolveInfo solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, bool threaded,
                             bool warm) const;
-    /// apply() with caller-owned per-slot and expansion buffers (reused across CG iterations).
-    void apply(const NodeVectors<D>& v, NodeVectors<D>& out, NodeVectors<D>& perSlot,
-               NodeVectors<D>& expanded, bool threaded) const;
 
     const SimplexLattice<D>* mLattice;
     Real mTau;
@@ -197,7 +200,10 @@ private:
     std::vector<int32_t> mFreeNodes;    ///< per unknown: node index
     std::vector<int32_t> mSupportNodes; ///< non-Dirichlet nodes (free and hanging), increasing
     std::vector<char> mDirichlet;       ///< per node: 1 on the boundary of Omega
-    Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per node, 0 on non-free nodes
+    std::vector<std::size_t> mRowBegin; ///< P^T G P: row i is [mRowBegin[i], mRowBegin[i + 1])
+    std::vector<int32_t> mColumns;      ///< ... its columns (unknowns), increasing per row
+    std::vector<Real> mValues;          ///< ... and values
+    Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per unknown: 1 / (P^T G P)_ii
     std::unique_ptr<Factor> mFactor;
 };
 
