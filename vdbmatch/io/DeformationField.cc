@@ -79,9 +79,11 @@ DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices,
         t[2] = 0;
     }
     // Axes by decreasing t (ties: lower axis first, any choice gives the same value).
+    // (Insertion sort: stable, and unlike std::stable_sort it never allocates a buffer.)
     std::array<int, 3> order{{0, 1, 2}};
-    std::stable_sort(order.begin(), order.begin() + mDim,
-                     [&](int a, int b) { return t[a] > t[b]; });
+    for (int i = 1; i < mDim; ++i)
+        for (int j = i; j > 0 && t[order[j]] > t[order[j - 1]]; --j)
+            std::swap(order[j], order[j - 1]);
     vertices[0] = origin;
     weights[0] = 1.0 - t[order[0]];
     for (int m = 1; m <= mDim; ++m) {
@@ -140,6 +142,7 @@ int
 DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) const
 {
     ConstAccessor acc(mGrid->tree());
+    const double invVoxel = 1.0 / mVoxelSize;
     const int corners = 1 << mDim;
     std::array<openvdb::Vec3d, 8> u;
     for (int c = 0; c < corners; ++c) {
@@ -147,7 +150,7 @@ DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) con
         if (mDim == 2) v[2] = mSliceK;
         for (int a = 0; a < mDim; ++a)
             v[a] += (c >> a) & 1;
-        u[c] = openvdb::Vec3d(acc.getValue(v)) / mVoxelSize;
+        u[c] = openvdb::Vec3d(acc.getValue(v)) * invVoxel;
     }
     std::array<int, 3> order{{0, 1, 2}};
     int count = 0;

@@ -409,7 +409,23 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     const bool warm = initialGuess && !mFactor && initialGuess->rows() == D &&
                       std::size_t(initialGuess->cols()) == n;
     const auto u = Eigen::Index(unknownCount());
-    NodeVectors<D> x(D, u);
+    Workspace w;
+    {
+        std::unique_lock<std::mutex> lock(mWorkspaceMutex, std::try_to_lock);
+        if (lock.owns_lock()) std::swap(w, mWorkspace);
+    }
+    struct GiveBack
+    {
+        const H1Metric& metric;
+        Workspace& w;
+        ~GiveBack()
+        {
+            std::lock_guard<std::mutex> lock(metric.mWorkspaceMutex);
+            std::swap(w, metric.mWorkspace);
+        }
+    } giveBack{*this, w};
+    NodeVectors<D>& x = w.x;
+    x.resize(D, u);
     if (warm) {
         for (Eigen::Index k = 0; k < u; ++k)
             x.col(k) = initialGuess->col(mFreeNodes[std::size_t(k)]);
@@ -417,9 +433,11 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     out.setZero(D, Eigen::Index(n));
     if (u == 0) return {};
     // b = P^T g on the unknowns: the hanging nodes' co-vector entries moved to their masters.
-    NodeVectors<D> b(D, u);
+    NodeVectors<D>& b = w.b;
+    b.resize(D, u);
     if (mLattice->hangingNodeCount() > 0) {
-        NodeVectors<D> reduced = gIn;
+        NodeVectors<D>& reduced = w.reduced;
+        reduced = gIn;
         zeroDirichlet(reduced);
         mLattice->reduce(reduced);
         for (Eigen::Index k = 0; k < u; ++k)
@@ -430,7 +448,7 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     }
     MetricSolveInfo info;
     if (!mFactor) {
-        info = solveCg(b, x, threaded, warm);
+        info = solveCg(b, x, w, threaded, warm);
     } else {
         // All D components with one factorisation: right-hand sides as the columns of B.
         const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(b.transpose());
@@ -445,7 +463,8 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
 
 template <int D>
 MetricSolveInfo
-H1Metric<D>::solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, bool threaded, bool warm) const
+H1Metric<D>::solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, Workspace& w, bool threaded,
+                     bool warm) const
 {
     // Jacobi-preconditioned CG, the D components iterated together (one product per iteration
     // serves all of them); a converged component is frozen. The vector updates are fused into
@@ -484,7 +503,9 @@ H1Metric<D>::solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, bool threaded, 
         }
     };
     const auto& invDiag = mInverseDiagonal;
-    NodeVectors<D> r(D, n), z(D, n), p(D, n), q(D, n);
+    NodeVectors<D>&r = w.r, &z = w.z, &p = w.p, &q = w.q;
+    for (NodeVectors<D>* v : {&r, &z, &p, &q})
+        v->resize(D, n);
     // |b|: the tolerance is relative to it, warm or not.
     const Col bNorm = pass([&](Eigen::Index i0, Eigen::Index i1, Eigen::Matrix<Real, D, 3>& acc) {
                           for (Eigen::Index i = i0; i < i1; ++i)

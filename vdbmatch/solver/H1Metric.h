@@ -70,6 +70,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <mutex>
 #include <vector>
 
 namespace vdbmatch {
@@ -189,8 +190,13 @@ private:
     void assemble(bool threaded);
     /// y = (P^T G P) x on unknown vectors (D x unknownCount).
     void multiply(const NodeVectors<D>& x, NodeVectors<D>& y, bool threaded) const;
+    /// Work arrays of applyInverse (unknown vectors, and the node-sized reduced co-vector).
+    struct Workspace
+    {
+        NodeVectors<D> b, x, r, z, p, q, reduced;
+    };
     /// Solves (P^T G P) x = b on unknown vectors; starts from x if @a warm, else from 0.
-    MetricSolveInfo solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, bool threaded,
+    MetricSolveInfo solveCg(const NodeVectors<D>& b, NodeVectors<D>& x, Workspace& w, bool threaded,
                             bool warm) const;
 
     const SimplexLattice<D>* mLattice;
@@ -205,6 +211,10 @@ private:
     std::vector<Real> mValues;          ///< ... and values
     Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per unknown: 1 / (P^T G P)_ii
     std::unique_ptr<Factor> mFactor;
+    /// Kept between calls so that a descent does not allocate and fault in its arrays at every
+    /// solve; a concurrent call that finds it taken uses its own.
+    mutable std::mutex mWorkspaceMutex;
+    mutable Workspace mWorkspace;
 };
 
 extern template class H1Metric<2>;
