@@ -188,6 +188,24 @@ SimplexLattice<D>::fromCellMasks(int level, const std::vector<openvdb::MaskGrid:
         }
     }
 
+    // Small lattices (the coarse levels) have few leaves, too few blocks to keep two threads
+    // busy: blocks are split into slabs of at most cellCount / MIN_BLOCKS cells (not below
+    // MIN_BLOCK_CELLS), in the same fixed order. Large lattices keep one block per leaf, which
+    // shares the most nodes between the cells of a block.
+    {
+        constexpr std::size_t MIN_BLOCKS = 64, MIN_BLOCK_CELLS = 32;
+        const std::size_t maxCells = std::max(MIN_BLOCK_CELLS, L.mCells.size() / MIN_BLOCKS);
+        std::vector<Block> split;
+        for (const Block& b : L.mBlocks) {
+            const std::size_t count = b.cellEnd - b.cellBegin;
+            const std::size_t pieces = (count + maxCells - 1) / maxCells;
+            for (std::size_t k = 0; k < pieces; ++k)
+                split.push_back(Block{b.cellBegin + count * k / pieces,
+                                      b.cellBegin + count * (k + 1) / pieces, 0, 0});
+        }
+        L.mBlocks.swap(split);
+    }
+
     // 2. Nodes: every cell corner, numbered in the leaf order of a node mask.
     auto cornerCoord = [](const Cell& c, int corner) {
         openvdb::Coord ijk = c.origin;
