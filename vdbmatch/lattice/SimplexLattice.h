@@ -12,9 +12,10 @@
 ///
 /// Cells are held as OpenVDB topology: one MaskGrid per cell size 2^s, voxel (a,b,c) of grid s
 /// being the cell with origin 2^s (a,b,c). The assembly runs over "blocks", one per leaf node of
-/// these grids (at most 8^d cells each), in a fixed order; each block owns a local list of the
-/// nodes its cells touch ("slots"), so that gradients are scattered without atomics and gathered
-/// per node in block order (results independent of the thread count).
+/// these grids (at most 8^d cells each; on small lattices a leaf is cut into slabs so that there
+/// are at least 64 blocks to share between threads), in a fixed order; each block owns a local
+/// list of the nodes its cells touch ("slots"), so that gradients are scattered without atomics
+/// and gathered per node in block order (results independent of the thread count).
 ///
 /// Nodes on the boundary of Omega carry the Dirichlet condition phi = Id (u = 0).
 ///
