@@ -152,6 +152,13 @@ DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) con
             v[a] += (c >> a) & 1;
         u[c] = openvdb::Vec3d(acc.getValue(v)) * invVoxel;
     }
+    return cellDeterminants(mDim, u.data(), dets);
+}
+
+int
+DeformationField::cellDeterminants(int dimension, const openvdb::Vec3d* u, double* dets)
+{
+    const int mDim = dimension;
     std::array<int, 3> order{{0, 1, 2}};
     int count = 0;
     do {

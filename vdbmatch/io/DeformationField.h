@@ -56,6 +56,8 @@ public:
 
     /// 2 for a one-layer grid, else 3.
     int dimension() const { return mDim; }
+    /// 2D: the index k of the plane the grid's voxels lie in (0 in 3D).
+    int sliceIndex() const { return mSliceK; }
     const openvdb::Vec3SGrid& grid() const { return *mGrid; }
     /// World box of the active voxels (the domain Omega in world units).
     const openvdb::BBoxd& worldBounds() const { return mWorldBounds; }
@@ -80,6 +82,10 @@ public:
     /// @param dets  room for d! values
     /// @return d! (2 or 6)
     int cellDeterminants(const openvdb::Coord& cell, double* dets) const;
+    /// The same from the displacements of the cell's corners, in index units (voxel value /
+    /// voxelSize), corner c at cell + bit a of c along axis a (2^d of them): for callers that
+    /// read a block of corners at once.
+    static int cellDeterminants(int dimension, const openvdb::Vec3d* corners, double* dets);
 
     /// Result of an inverse evaluation.
     struct InverseResult

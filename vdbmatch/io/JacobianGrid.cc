@@ -40,7 +40,10 @@ makeJacobianGrid(const DeformationField& phi, bool logarithm, bool threaded,
         std::vector<double> maxs(count, -std::numeric_limits<double>::infinity());
         std::vector<char> folded(count, 0);
         std::atomic<bool> stopped{false};
+        const double invVoxel = 1.0 / phi.voxelSize();
         auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+            openvdb::tree::ValueAccessor<const openvdb::Vec3STree, false> acc(phi.grid().tree());
+            std::vector<openvdb::Vec3d> corners(std::size_t((S + 1) * (S + 1) * (S + 1)));
             for (std::size_t b = range.begin(); b != range.end(); ++b) {
                 if (stopped.load(std::memory_order_relaxed)) return;
                 if (interrupter && interrupter->wasInterrupted()) {
@@ -57,11 +60,28 @@ makeJacobianGrid(const DeformationField& phi, bool logarithm, bool threaded,
                 const openvdb::Coord end(std::min(hi[0], start[0] + S - 1),
                                          std::min(hi[1], start[1] + S - 1),
                                          dim == 3 ? std::min(hi[2], start[2] + S - 1) : lo[2]);
+                // The block's corner displacements, read once (index units): (S+1)^d nodes
+                // instead of 2^d look-ups per cell.
+                const int kz = dim == 3 ? S + 1 : 1;
+                for (int k = 0; k < kz; ++k)
+                    for (int j = 0; j <= S; ++j)
+                        for (int i = 0; i <= S; ++i) {
+                            openvdb::Coord v = start.offsetBy(i, j, k);
+                            if (dim == 2) v[2] = phi.sliceIndex();
+                            corners[std::size_t(i + (S + 1) * (j + (S + 1) * k))] =
+                                openvdb::Vec3d(acc.getValue(v)) * invVoxel;
+                        }
+                openvdb::Vec3d u[8];
                 for (int k = start[2]; k <= end[2]; ++k) {
                     for (int j = start[1]; j <= end[1]; ++j) {
                         for (int i = start[0]; i <= end[0]; ++i) {
                             const openvdb::Coord c(i, j, k);
-                            const int n = phi.cellDeterminants(c, dets);
+                            const int li = i - start[0], lj = j - start[1], lk = k - start[2];
+                            for (int q = 0; q < (1 << dim); ++q)
+                                u[q] = corners[std::size_t(
+                                    (li + (q & 1)) +
+                                    (S + 1) * ((lj + ((q >> 1) & 1)) + (S + 1) * (lk + (q >> 2))))];
+                            const int n = DeformationField::cellDeterminants(dim, u, dets);
                             double mean = 0;
                             for (int s = 0; s < n; ++s) {
                                 mean += dets[s];
