@@ -350,27 +350,10 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
                                                                << " nodal displacements, got "
                                                                << u.cols());
     std::vector<EnergyTerms> partial(L.blocks().size());
-    NodeVectors<D> perSlot;
     // Each block zeroes its own slots inside the parallel loop (no serial pass over memory).
-    if constexpr (Grad) {
-        {
-            std::unique_lock<std::mutex> lock(mSlotBufferMutex, std::try_to_lock);
-            if (lock.owns_lock()) perSlot.swap(mSlotBuffer);
-        }
-        perSlot.resize(D, L.slotNodes().size());
-    }
-    // Hands the buffer back for the next evaluation.
-    struct GiveBack
-    {
-        const Energy& energy;
-        NodeVectors<D>& buffer;
-        ~GiveBack()
-        {
-            if (buffer.size() == 0) return;
-            std::lock_guard<std::mutex> lock(energy.mSlotBufferMutex);
-            if (energy.mSlotBuffer.size() == 0) energy.mSlotBuffer.swap(buffer);
-        }
-    } giveBack{*this, perSlot};
+    typename detail::ScratchBuffer<NodeVectors<D>>::Lease slotLease(mSlotBuffer);
+    NodeVectors<D>& perSlot = *slotLease;
+    if constexpr (Grad) perSlot.resize(D, L.slotNodes().size());
     bool interrupted = false;
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {
         if (interrupter && interrupter->wasInterrupted()) {

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <vdbmatch/Parameters.h>
+#include <vdbmatch/ScratchBuffer.h>
 #include <vdbmatch/energy/LandmarkTerm.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 #include <vdbmatch/kinematics/SurfaceFrame.h>
@@ -27,7 +28,6 @@
 
 #include <array>
 #include <cstddef>
-#include <mutex>
 #include <vector>
 
 namespace vdbmatch {
@@ -138,8 +138,7 @@ private:
     /// The per-slot gradient array of valueAndGradient, kept between evaluations so that a
     /// descent does not allocate (and fault in) tens of MB per iteration. One buffer; an
     /// evaluation that finds it taken (a concurrent one) allocates its own.
-    mutable std::mutex mSlotBufferMutex;
-    mutable NodeVectors<D> mSlotBuffer;
+    detail::ScratchBuffer<NodeVectors<D>> mSlotBuffer;
 
     const SimplexLattice<D>* mLattice;
     std::vector<int32_t> mSourceIndex; ///< per simplex (cell * SIMPLICES + p): index or -1

@@ -158,22 +158,21 @@ DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) con
 int
 DeformationField::cellDeterminants(int dimension, const openvdb::Vec3d* u, double* dets)
 {
-    const int mDim = dimension;
     std::array<int, 3> order{{0, 1, 2}};
     int count = 0;
     do {
         // Path cell -> cell + e_order[0] -> ...: column order[m] of D phi is e + du.
         openvdb::Mat3d A = openvdb::Mat3d::identity();
         int mask = 0;
-        for (int m = 0; m < mDim; ++m) {
+        for (int m = 0; m < dimension; ++m) {
             const int next = mask | (1 << order[m]);
             const openvdb::Vec3d du = u[next] - u[mask];
-            for (int r = 0; r < mDim; ++r)
+            for (int r = 0; r < dimension; ++r)
                 A(r, order[m]) += du[r];
             mask = next;
         }
-        dets[count++] = mDim == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
-    } while (std::next_permutation(order.begin(), order.begin() + mDim));
+        dets[count++] = dimension == 2 ? A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0) : A.det();
+    } while (std::next_permutation(order.begin(), order.begin() + dimension));
     return count;
 }
 

@@ -409,21 +409,8 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     const bool warm = initialGuess && !mFactor && initialGuess->rows() == D &&
                       std::size_t(initialGuess->cols()) == n;
     const auto u = Eigen::Index(unknownCount());
-    Workspace w;
-    {
-        std::unique_lock<std::mutex> lock(mWorkspaceMutex, std::try_to_lock);
-        if (lock.owns_lock()) std::swap(w, mWorkspace);
-    }
-    struct GiveBack
-    {
-        const H1Metric& metric;
-        Workspace& w;
-        ~GiveBack()
-        {
-            std::lock_guard<std::mutex> lock(metric.mWorkspaceMutex);
-            std::swap(w, metric.mWorkspace);
-        }
-    } giveBack{*this, w};
+    typename detail::ScratchBuffer<Workspace>::Lease lease(mWorkspace);
+    Workspace& w = *lease;
     NodeVectors<D>& x = w.x;
     x.resize(D, u);
     if (warm) {

@@ -62,6 +62,7 @@
 /// @see paper sec:numerics
 #pragma once
 
+#include <vdbmatch/ScratchBuffer.h>
 #include <vdbmatch/Types.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
 
@@ -70,7 +71,6 @@
 
 #include <cstddef>
 #include <memory>
-#include <mutex>
 #include <vector>
 
 namespace vdbmatch {
@@ -211,10 +211,7 @@ private:
     std::vector<Real> mValues;          ///< ... and values
     Eigen::Matrix<Real, Eigen::Dynamic, 1> mInverseDiagonal; ///< per unknown: 1 / (P^T G P)_ii
     std::unique_ptr<Factor> mFactor;
-    /// Kept between calls so that a descent does not allocate and fault in its arrays at every
-    /// solve; a concurrent call that finds it taken uses its own.
-    mutable std::mutex mWorkspaceMutex;
-    mutable Workspace mWorkspace;
+    detail::ScratchBuffer<Workspace> mWorkspace; ///< applyInverse's arrays, kept between calls
 };
 
 extern template class H1Metric<2>;
