@@ -97,14 +97,8 @@ for e in "${ENERGY_LIST[@]}"; do
   case "$e" in symmetric|directional) ;; *) die "unknown energy '$e' (symmetric or directional)" ;; esac
 done
 
-KEEP=1
-if [ -z "$OUT" ]; then
-  OUT=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-accuracy.XXXXXX")
-  KEEP=0
-  trap 'rm -rf "$OUT"' EXIT
-fi
-mkdir -p "$OUT"
-OUT=$(cd "$OUT" && pwd)
+source "$ROOT/bench/accuracy/ensure_pairs.sh"
+output_dir accuracy
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -n1))"
@@ -112,7 +106,6 @@ echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGI
 echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
 
 # --- pairs -----------------------------------------------------------------------------------
-source "$ROOT/bench/accuracy/ensure_pairs.sh"
 ensure_pairs "$OUT" "${PAIR_LIST[@]}"
 echo
 

@@ -53,18 +53,11 @@ MAKE_PAIRS=$ROOT/bench/accuracy/make_pairs.py
 [ -z "$AMM" ] || [ -x "$AMM" ] || die "--amm $AMM is not an executable"
 [ -n "$BCPD$AMM" ] || echo "compare_peers.sh: neither --bcpd nor --amm given: every peer is skipped"
 
-KEEP=1
-if [ -z "$OUT" ]; then
-  OUT=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-peers.XXXXXX")
-  KEEP=0
-  trap 'rm -rf "$OUT"' EXIT
-fi
-mkdir -p "$OUT"
-OUT=$(cd "$OUT" && pwd)
+source "$ROOT/bench/accuracy/ensure_pairs.sh"
+output_dir peers
 [ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
 IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
 
-source "$ROOT/bench/accuracy/ensure_pairs.sh"
 ensure_pairs "$OUT" "${PAIR_LIST[@]}" >/dev/null
 
 # points FILE OUT: the vertices of an OBJ (v lines) or a polyline (x y lines), tab-separated.

@@ -1,4 +1,18 @@
 # Sourced by bench/bench_accuracy.sh and bench/compare_peers.sh.
+#
+# output_dir NAME: makes OUT (the caller's variable) an absolute, existing folder; when OUT is
+# empty, a temporary one (vdbmatch-NAME.XXXXXX) removed on exit, and KEEP=0 (else KEEP=1).
+output_dir() {
+  KEEP=1
+  if [ -z "$OUT" ]; then
+    OUT=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-$1.XXXXXX")
+    KEEP=0
+    trap 'rm -rf "$OUT"' EXIT
+  fi
+  mkdir -p "$OUT"
+  OUT=$(cd "$OUT" && pwd)
+}
+
 # ensure_pairs OUT PAIR...: generates OUT/pairs/P with make_pairs.py for every pair P that is
 # missing, older than make_pairs.py, or lacks a file the current generator writes (landmarks,
 # the resampled target); prints what it did. The caller sets PYTHON and MAKE_PAIRS and defines die.
