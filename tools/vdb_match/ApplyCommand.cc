@@ -377,6 +377,12 @@ applyOptionHelp()
     return optionHelp(applyOptionTable());
 }
 
+std::vector<OptionDescription>
+applyOptionDescriptions()
+{
+    return describeOptions(applyOptionTable());
+}
+
 std::string
 applyHelpText()
 {

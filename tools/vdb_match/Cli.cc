@@ -191,6 +191,25 @@ rejectUnknownCommand(const std::string& word)
 
 } // namespace
 
+std::vector<OptionDescription>
+commandOptions(const std::string& command)
+{
+    if (command == "match") return matchOptionDescriptions();
+    if (command == "energy") return energyOptionDescriptions();
+    if (command == "consistency") return consistencyOptionDescriptions();
+    if (command == "slice") return sliceOptionDescriptions();
+    if (command == "texture") return textureOptionDescriptions();
+    if (command == "apply") return applyOptionDescriptions();
+    return {};
+}
+
+int
+run(int argc, const char* const* argv, std::ostream& out, std::ostream& err, const RunHooks& hooks)
+{
+    const HooksScope scope(&hooks);
+    return run(argc, argv, out, err);
+}
+
 int
 run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
 {

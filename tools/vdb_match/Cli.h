@@ -15,10 +15,13 @@
 #include <vdbmatch/Parameters.h>
 #include <vdbmatch/geometry/UnitBox.h>
 
+#include <atomic>
+#include <functional>
 #include <iosfwd>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace vdbmatch {
 namespace cli {
@@ -69,6 +72,17 @@ struct EnergyOptions
 /// contradictory options. Range checks are left to the library (exit code EXIT_INVALID_INPUT).
 EnergyOptions parseEnergyOptions(int argc, const char* const* argv, int first);
 
+/// One option of a command, as data: for programs that build command lines (the Python
+/// module's keywords) and for documentation.
+struct OptionDescription
+{
+    std::string name;    ///< canonical spelling, "--energy-tolerance"
+    std::string metavar; ///< "X", "A.csv B.csv"; empty for a flag
+    int values = 0;      ///< number of values it takes (0 for a flag)
+    std::string group;   ///< help group
+    std::string help;    ///< help text, with the default
+};
+
 /// The overview: usage lines, what each command does, exit codes.
 std::string helpText();
 /// The help page of one command (`vdb_match COMMAND --help`): usage, description, its options
@@ -84,8 +98,19 @@ std::string sliceOptionHelp();
 std::string textureOptionHelp();
 /// The option lines of `apply`, with their defaults.
 std::string applyOptionHelp();
+/// The option tables as data (commandOptions).
+std::vector<OptionDescription> matchOptionDescriptions();
+std::vector<OptionDescription> energyOptionDescriptions();
+std::vector<OptionDescription> consistencyOptionDescriptions();
+std::vector<OptionDescription> sliceOptionDescriptions();
+std::vector<OptionDescription> textureOptionDescriptions();
+std::vector<OptionDescription> applyOptionDescriptions();
 /// The help page of `apply` (usage, directions, options).
 std::string applyHelpText();
+
+/// The options of @a command ("match", "energy", "consistency", "slice", "texture", "apply"),
+/// in the order of its help page; empty for an unknown command.
+std::vector<OptionDescription> commandOptions(const std::string& command);
 
 /// The preview path of a slice channel: OUT.exr -> OUT.<channel>.png.
 std::string slicePreviewPath(const std::string& exrPath, const std::string& channel);
@@ -109,6 +134,42 @@ int runTextureCommand(int argc, const char* const* argv, int first, std::ostream
 /// Runs the command line and returns the exit code. Writes results to @a out and progress and
 /// errors to @a err. Installs SIGINT/SIGTERM handlers for the duration of a command.
 int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err);
+
+/// A progress event of `match`, for a program that embeds the command line (RunHooks).
+struct ProgressEvent
+{
+    enum class Kind {
+        Message,    ///< a stage: reading, writing, ...
+        LevelStart, ///< a level's lattice is built
+        Iteration,  ///< one descent iteration done (every iteration, whatever --progress-every)
+        LevelEnd    ///< a level's descent ended
+    };
+    Kind kind = Kind::Message;
+    int level = 0;             ///< the level (LevelStart, Iteration, LevelEnd)
+    int firstLevel = 0;        ///< the run's first level
+    int lastLevel = 0;         ///< the run's last level
+    int iteration = 0;         ///< Iteration, LevelEnd: the level's iteration count
+    double energy = 0;         ///< Iteration, LevelEnd: E at that iteration
+    double elapsedSeconds = 0; ///< since the match started
+    double secondsLeft = -1;   ///< estimate of the time left (-1: none yet)
+    std::string text;          ///< what the command prints for it, without "vdb_match: "
+};
+
+/// What a program that embeds the command line (the Python module) hands to run().
+struct RunHooks
+{
+    /// Called on the thread that called run(), for every ProgressEvent of `match`.
+    std::function<void(const ProgressEvent&)> progress;
+    /// When set (from any thread), the command stops as on SIGINT (exit code EXIT_INTERRUPTED).
+    const std::atomic<bool>* cancel = nullptr;
+    /// Install SIGINT/SIGTERM handlers for the command, as the CLI does; unlike the CLI's, a
+    /// second signal does not terminate the process. False leaves the caller's handlers alone.
+    bool handleSignals = true;
+};
+
+/// run() for an embedding: the same commands, exit codes and outputs, with @a hooks.
+int run(int argc, const char* const* argv, std::ostream& out, std::ostream& err,
+        const RunHooks& hooks);
 
 } // namespace cli
 } // namespace vdbmatch

@@ -410,25 +410,48 @@ namespace {
 
 std::atomic<bool> sInterrupted{false};
 static_assert(std::atomic<bool>::is_always_lock_free, "the signal handler needs a lock-free flag");
+/// Whether a second signal terminates at once (the CLI) or only raises the flag again (an
+/// embedding, RunHooks).
+std::atomic<bool> sSecondSignalTerminates{true};
+const RunHooks* sHooks = nullptr;
 
 extern "C" void
 onSignal(int sig)
 {
     sInterrupted.store(true);
-    std::signal(sig, SIG_DFL); // a second signal terminates at once
+    if (sSecondSignalTerminates.load()) std::signal(sig, SIG_DFL);
 }
 
 } // namespace
 
-SignalScope::SignalScope()
+HooksScope::HooksScope(const RunHooks* hooks) : mPrevious(sHooks)
+{
+    sHooks = hooks;
+}
+
+HooksScope::~HooksScope()
+{
+    sHooks = mPrevious;
+}
+
+const RunHooks*
+currentHooks()
+{
+    return sHooks;
+}
+
+SignalScope::SignalScope() : mInstalled(!sHooks || sHooks->handleSignals)
 {
     sInterrupted.store(false);
+    if (!mInstalled) return;
+    sSecondSignalTerminates.store(sHooks == nullptr);
     mInt = std::signal(SIGINT, onSignal);
     mTerm = std::signal(SIGTERM, onSignal);
 }
 
 SignalScope::~SignalScope()
 {
+    if (!mInstalled) return;
     std::signal(SIGINT, mInt);
     std::signal(SIGTERM, mTerm);
 }
@@ -436,13 +459,13 @@ SignalScope::~SignalScope()
 bool
 wasSignalled()
 {
-    return sInterrupted.load();
+    return sInterrupted.load() || (sHooks && sHooks->cancel && sHooks->cancel->load());
 }
 
 void
 checkInterrupted()
 {
-    if (sInterrupted.load()) throw Interrupted{};
+    if (wasSignalled()) throw Interrupted{};
 }
 
 double

@@ -10,6 +10,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/util/NullInterrupter.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <functional>
@@ -111,6 +112,24 @@ optionHelp(const std::vector<Option<T>>& table)
     return renderOptionHelp(bindOptions(table, unused));
 }
 
+/// The options of a table as data (commandOptions).
+template <typename T>
+std::vector<OptionDescription>
+describeOptions(const std::vector<Option<T>>& table)
+{
+    std::vector<OptionDescription> out;
+    for (const Option<T>& opt : table) {
+        OptionDescription d;
+        d.name = canonicalName(opt.name);
+        d.metavar = opt.metavar ? opt.metavar : "";
+        d.values = opt.metavar ? 1 + int(std::count(d.metavar.begin(), d.metavar.end(), ' ')) : 0;
+        d.group = opt.group;
+        d.help = opt.help;
+        out.push_back(std::move(d));
+    }
+    return out;
+}
+
 /// Fills @a source and @a target, those not given as --source/--target, from @a positional in
 /// order. @throw UsageError "WHAT, got N file argument(s)" unless the counts agree
 void assignInputs(const std::vector<std::string>& positional, std::string& source,
@@ -155,7 +174,8 @@ std::string wrapHelp(const std::string& left, const std::string& text);
 // Interruption
 
 /// Installs SIGINT/SIGTERM handlers that raise the interruption flag, while alive; a second
-/// signal terminates at once.
+/// signal terminates at once. Under an embedding's hooks (HooksScope) only if they ask for
+/// signal handling, and a second signal only raises the flag again.
 class SignalScope
 {
 public:
@@ -165,11 +185,28 @@ public:
     SignalScope& operator=(const SignalScope&) = delete;
 
 private:
-    void (*mInt)(int);
-    void (*mTerm)(int);
+    bool mInstalled;
+    void (*mInt)(int) = nullptr;
+    void (*mTerm)(int) = nullptr;
 };
 
-/// True once a signal arrived in the current SignalScope.
+/// Makes @a hooks those of the commands run while alive (run() with RunHooks).
+class HooksScope
+{
+public:
+    explicit HooksScope(const RunHooks* hooks);
+    ~HooksScope();
+    HooksScope(const HooksScope&) = delete;
+    HooksScope& operator=(const HooksScope&) = delete;
+
+private:
+    const RunHooks* mPrevious;
+};
+
+/// The hooks of the running command, or nullptr (the CLI).
+const RunHooks* currentHooks();
+
+/// True once a signal arrived in the current SignalScope, or the embedding's cancel flag is set.
 bool wasSignalled();
 
 /// An interrupter that fires once a signal arrived.
@@ -184,7 +221,7 @@ struct Interrupted
 {
 };
 
-/// Throws Interrupted if a signal arrived.
+/// Throws Interrupted if a signal arrived (or the embedding's cancel flag is set).
 void checkInterrupted();
 
 ////////////////////////////////////////////////////////////////////////////////

@@ -267,5 +267,11 @@ consistencyOptionHelp()
     return optionHelp(consistencyOptionTable());
 }
 
+std::vector<OptionDescription>
+consistencyOptionDescriptions()
+{
+    return describeOptions(consistencyOptionTable());
+}
+
 } // namespace cli
 } // namespace vdbmatch

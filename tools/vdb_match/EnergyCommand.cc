@@ -384,6 +384,12 @@ energyOptionHelp()
     return optionHelp(energyOptionTable());
 }
 
+std::vector<OptionDescription>
+energyOptionDescriptions()
+{
+    return describeOptions(energyOptionTable());
+}
+
 EnergyOptions
 parseEnergyOptions(int argc, const char* const* argv, int first)
 {

@@ -396,15 +396,17 @@ public:
     static constexpr double SURFACE_LEVEL_ITERATIONS = 12;
 
     /// @param firstSurfaceLevel  the first level the surface test may end (> maxLevel: none)
-    ProgressPrinter(std::ostream& err, const MatchCliOptions& o, int dim, int maxLevel,
-                    int firstSurfaceLevel)
-        : mErr(err), mO(o), mDim(dim), mMaxLevel(maxLevel), mFirstSurfaceLevel(firstSurfaceLevel)
+    ProgressPrinter(std::ostream& err, const MatchCliOptions& o, int dim, int minLevel,
+                    int maxLevel, int firstSurfaceLevel)
+        : mErr(err), mO(o), mDim(dim), mMinLevel(minLevel), mMaxLevel(maxLevel),
+          mFirstSurfaceLevel(firstSurfaceLevel), mHooks(currentHooks())
     {
     }
 
     void message(const std::string& text)
     {
         if (!mO.quiet) mErr << PROGRAM << ": " << text << std::endl;
+        emit(ProgressEvent::Kind::Message, 0, 0, 0, text);
     }
 
     void levelStart(int level, const LatticeSummary& s, double fieldSeconds, double latticeSeconds)
@@ -422,25 +424,31 @@ public:
         mLevelStart = Clock::now();
         mLevelPrep = fieldSeconds + latticeSeconds;
         const double fraction = s.denseNodes ? double(s.nodes) / double(s.denseNodes) : 1.0;
-        message("level " + std::to_string(level) + ": h = 2^-" + std::to_string(level) + ", " +
-                std::to_string(s.cells) + " cells, " + std::to_string(s.unknowns) + " unknowns (" +
-                std::to_string(s.nodes) + " nodes = " + fixed("%.1f", 100.0 * fraction) +
-                "% of the " + std::to_string(s.denseNodes) + " dense nodes, " +
-                std::to_string(s.hangingNodes) + " hanging); fields " +
-                fixed("%.2fs", fieldSeconds) + ", lattice " + fixed("%.2fs", latticeSeconds));
+        const std::string text =
+            "level " + std::to_string(level) + ": h = 2^-" + std::to_string(level) + ", " +
+            std::to_string(s.cells) + " cells, " + std::to_string(s.unknowns) + " unknowns (" +
+            std::to_string(s.nodes) + " nodes = " + fixed("%.1f", 100.0 * fraction) + "% of the " +
+            std::to_string(s.denseNodes) + " dense nodes, " + std::to_string(s.hangingNodes) +
+            " hanging); fields " + fixed("%.2fs", fieldSeconds) + ", lattice " +
+            fixed("%.2fs", latticeSeconds);
+        if (!mO.quiet) mErr << PROGRAM << ": " << text << std::endl;
+        emit(ProgressEvent::Kind::LevelStart, level, 0, 0, text);
     }
 
     void iteration(const solver::IterationInfo& i)
     {
-        if (mO.quiet || i.iteration % mO.progressEvery != 0) return;
-        mErr << PROGRAM << ": level " << i.level << " it " << fixed("%4.0f", i.iteration) << "  E "
-             << fixed("%.6e", i.energy) << " (" << termsText(i.terms) << ")  |g| "
-             << fixed("%.2e", i.gradNorm) << "  step " << fixed("%.2e", i.step) << "  "
-             << (i.surfaceMotion >= 0
-                     ? "surface moved " + fixed("%.3g", std::ldexp(i.surfaceMotion, i.level)) +
-                           " h  "
-                     : std::string())
-             << duration(secondsSince(mStart)) << timeLeft(i.level) << std::endl;
+        const bool print = !mO.quiet && i.iteration % mO.progressEvery == 0;
+        if (!print && !(mHooks && mHooks->progress)) return;
+        const std::string text =
+            "level " + std::to_string(i.level) + " it " + fixed("%4.0f", i.iteration) + "  E " +
+            fixed("%.6e", i.energy) + " (" + termsText(i.terms) + ")  |g| " +
+            fixed("%.2e", i.gradNorm) + "  step " + fixed("%.2e", i.step) + "  " +
+            (i.surfaceMotion >= 0
+                 ? "surface moved " + fixed("%.3g", std::ldexp(i.surfaceMotion, i.level)) + " h  "
+                 : std::string()) +
+            duration(secondsSince(mStart)) + timeLeft(i.level);
+        if (print) mErr << PROGRAM << ": " << text << std::endl;
+        emit(ProgressEvent::Kind::Iteration, i.level, i.iteration, i.energy, text);
     }
 
     void levelEnd(const LevelSummary& s)
@@ -452,16 +460,43 @@ public:
         if (r.status == solver::Status::Converged) {
             how += std::string(" (") + solver::toString(r.convergedBy) + ")";
         }
-        message("level " + std::to_string(s.level) + " done: " + how + " after " +
-                std::to_string(r.iterations) + " iterations, E " + fixed("%.6e", r.energy) + " (" +
-                termsText(r.terms) + "), min det " + fixed("%.3g", r.minJacobian) + ", " +
-                fixed("%.1fs", r.elapsedSeconds));
+        const std::string text = "level " + std::to_string(s.level) + " done: " + how + " after " +
+                                 std::to_string(r.iterations) + " iterations, E " +
+                                 fixed("%.6e", r.energy) + " (" + termsText(r.terms) +
+                                 "), min det " + fixed("%.3g", r.minJacobian) + ", " +
+                                 fixed("%.1fs", r.elapsedSeconds);
+        if (!mO.quiet) mErr << PROGRAM << ": " << text << std::endl;
+        emit(ProgressEvent::Kind::LevelEnd, s.level, r.iterations, r.energy, text);
     }
 
 private:
+    void emit(ProgressEvent::Kind kind, int level, int iteration, double energy,
+              const std::string& text) const
+    {
+        if (!mHooks || !mHooks->progress) return;
+        ProgressEvent e;
+        e.kind = kind;
+        e.level = level;
+        e.firstLevel = mMinLevel;
+        e.lastLevel = mMaxLevel;
+        e.iteration = iteration;
+        e.energy = energy;
+        e.elapsedSeconds = secondsSince(mStart);
+        e.secondsLeft = level > 0 ? secondsLeft(level) : -1;
+        e.text = text;
+        mHooks->progress(e);
+    }
+
     std::string timeLeft(int level) const
     {
-        if (mLevelEstimate <= 0) return "";
+        const double left = secondsLeft(level);
+        return left < 0 ? "" : "  left ~" + duration(left);
+    }
+
+    /// The estimate of the time left while at @a level, or -1 before there is one.
+    double secondsLeft(int level) const
+    {
+        if (mLevelEstimate <= 0) return -1;
         const double growth = std::pow(2.0, mDim - 1);
         double left = std::max(0.0, mLevelEstimate - secondsSince(mLevelStart));
         double full = mFullLevel, iteration = mIteration, prep = mLevelPrep;
@@ -471,12 +506,13 @@ private:
             prep *= growth;
             left += l >= mFirstSurfaceLevel ? prep + SURFACE_LEVEL_ITERATIONS * iteration : full;
         }
-        return "  left ~" + duration(left);
+        return left;
     }
 
     std::ostream& mErr;
     const MatchCliOptions& mO;
-    int mDim, mMaxLevel, mFirstSurfaceLevel;
+    int mDim, mMinLevel, mMaxLevel, mFirstSurfaceLevel;
+    const RunHooks* mHooks;
     Clock::time_point mStart = Clock::now(), mLevelStart = Clock::now();
     double mLevelEstimate = -1, mLastLevelSeconds = 0, mLevelPrep = 0;
     double mLastIterationSeconds = 0, mFullLevel = 0, mIteration = 0;
@@ -807,7 +843,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     const int firstSurfaceLevel = opts.multiscale.surfaceTolerance > 0
                                       ? opts.multiscale.maxLevel - opts.multiscale.surfaceLevels + 1
                                       : opts.multiscale.maxLevel + 1;
-    ProgressPrinter progress(err, o, D, opts.multiscale.maxLevel, firstSurfaceLevel);
+    ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel,
+                             firstSurfaceLevel);
     progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
                      "D, " + (o.preset == "paper" ? "preset paper, " : "") +
                      toString(opts.multiscale.kind) + " energy, levels " +
@@ -1004,6 +1041,12 @@ std::string
 matchOptionHelp()
 {
     return optionHelp(matchOptionTable());
+}
+
+std::vector<OptionDescription>
+matchOptionDescriptions()
+{
+    return describeOptions(matchOptionTable());
 }
 
 int

@@ -227,5 +227,11 @@ sliceOptionHelp()
     return optionHelp(sliceOptionTable());
 }
 
+std::vector<OptionDescription>
+sliceOptionDescriptions()
+{
+    return describeOptions(sliceOptionTable());
+}
+
 } // namespace cli
 } // namespace vdbmatch

@@ -415,6 +415,12 @@ textureOptionHelp()
     return optionHelp(textureOptionTable());
 }
 
+std::vector<OptionDescription>
+textureOptionDescriptions()
+{
+    return describeOptions(textureOptionTable());
+}
+
 int
 runTextureCommand(int argc, const char* const* argv, int first, std::ostream& out,
                   std::ostream& err)

@@ -300,6 +300,13 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
 std::size_t
 DeformationField::mapPoints(std::vector<openvdb::Vec3d>& points, bool inverse, bool threaded) const
 {
+    return mapPoints(points.data(), points.size(), inverse, threaded);
+}
+
+std::size_t
+DeformationField::mapPoints(openvdb::Vec3d* points, std::size_t count, bool inverse,
+                            bool threaded) const
+{
     std::atomic<std::size_t> failed{0};
     auto body = [&](const tbb::blocked_range<std::size_t>& range) {
         std::size_t bad = 0;
@@ -314,7 +321,7 @@ DeformationField::mapPoints(std::vector<openvdb::Vec3d>& points, bool inverse, b
         }
         failed += bad;
     };
-    const tbb::blocked_range<std::size_t> all(0, points.size(), 1024);
+    const tbb::blocked_range<std::size_t> all(0, count, 1024);
     if (threaded) {
         tbb::parallel_for(all, body);
     } else {

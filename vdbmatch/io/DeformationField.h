@@ -105,6 +105,9 @@ public:
     /// @return the number of points whose inverse walk did not end (found == false); 0 for phi
     std::size_t mapPoints(std::vector<openvdb::Vec3d>& pointsWorld, bool inverse,
                           bool threaded = true) const;
+    /// The same on @a count points stored contiguously (e.g. an (n, 3) array of doubles).
+    std::size_t mapPoints(openvdb::Vec3d* pointsWorld, std::size_t count, bool inverse,
+                          bool threaded = true) const;
 
 private:
     /// Index position, cell origin and the containing simplex's path (vertices, weights).
