@@ -226,7 +226,7 @@ def _tqdm_progress():
         if e["kind"] == "iteration":
             bar.set_postfix(level=e["level"], it=e["iteration"], E=f"{e['energy']:.4g}",
                             refresh=False)
-            bar.refresh()
+            bar.update(0)  # redraws at most every mininterval
         elif e["kind"] == "level_end":
             bar.update(1)
             if e["level"] == e["last_level"]:

@@ -86,6 +86,35 @@ def test_match_from_pyopenvdb_grid_equals_cli(tmp_path):
     assert voxels(r.displacement) == voxels(cli.displacement)
 
 
+def sphere_mesh():
+    """A triangle mesh (V, F) of assets/sphere.vdb's zero level set."""
+    V, tris, quads = pyopenvdb.readAll(SPHERE)[0][0].convertToPolygons(adaptivity=0.0)
+    F = np.vstack([tris, quads[:, :3], quads[:, [0, 2, 3]]]).astype(np.int64)
+    return V.astype(np.float64), F
+
+
+def test_match_from_a_numpy_mesh_equals_cli_on_the_same_mesh(tmp_path):
+    V, F = sphere_mesh()
+    obj = tmp_path / "sphere.obj"
+    with open(obj, "w") as f:  # written here, not by the module: shortest round-trip decimals
+        f.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+        f.writelines(f"f {a} {b} {c}\n" for a, b, c in (F + 1).tolist())
+    run_cli([str(obj), ELLIPSOID, "-o", str(tmp_path / "cli"), "--levels", "3..4"])
+    r = vdbmatch.match((V, F), ELLIPSOID, levels="3..4", progress=False)
+    cli = vdbmatch.load(tmp_path / "cli")
+    assert r.report["result"]["energy"] == cli.report["result"]["energy"]
+    assert voxels(r.displacement) == voxels(cli.displacement)
+    moved, faces = r.deformed_mesh()
+    assert moved.shape == V.shape and np.array_equal(faces, F)
+
+
+def test_default_progress_is_a_tqdm_bar_when_tqdm_is_installed(capsys):
+    pytest.importorskip("tqdm")
+    vdbmatch.match(FIGURE_A, FIGURE_B, levels="4..5")
+    err = capsys.readouterr().err
+    assert "vdbmatch" in err and "2/2" in err
+
+
 def test_apply_agrees_with_deformed_obj_and_inverse_undoes_it():
     curve = read_polyline(FIGURE_A)[0]
     r = vdbmatch.match(curve, FIGURE_B, progress=False, **QUICK_2D)
