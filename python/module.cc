@@ -14,6 +14,7 @@
 
 #include <atomic>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -109,6 +110,10 @@ runCommand(const std::vector<std::string>& args, py::object progress, bool handl
     int code = 0;
     {
         py::gil_scoped_release release;
+        // The commands keep their interruption flag and hooks in process-wide state, and each
+        // uses every core: calls from several Python threads run one after the other.
+        static std::mutex runMutex;
+        const std::lock_guard<std::mutex> lock(runMutex);
         code = cli::run(int(argv.size()), argv.data(), out, err, hooks);
     }
     if (callbackError) throw std::move(*callbackError);

@@ -251,6 +251,24 @@ def test_the_gil_is_released_while_matching():
     assert len(ticks) - start > 20
 
 
+def test_calls_from_several_threads_run_one_after_the_other():
+    results, errors = [None, None], []
+
+    def run(k):
+        try:
+            results[k] = vdbmatch.match(FIGURE_A, FIGURE_B, progress=lambda e: None, levels="4..5")
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=run, args=(k,)) for k in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors
+    assert results[0].report["result"]["energy"] == results[1].report["result"]["energy"]
+
+
 def test_every_match_option_is_a_keyword():
     names = {o["name"] for o in vdbmatch.options("match")}
     keywords = set(vdbmatch._keyword_table("match"))
