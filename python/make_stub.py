@@ -78,7 +78,7 @@ def stub():
     out += keywords("energy")
     out.append(") -> dict[str, Any]: ...\n")
     out.append("def consistency(\n    phi: MatchResult | Path,\n    psi: MatchResult | Path,\n"
-               "    source: Shape,\n    target: Shape,\n    *,")
+               "    source: Shape | None = None,\n    target: Shape | None = None,\n    *,")
     out += keywords("consistency")
     out.append(") -> dict[str, Any]: ...")
     return "\n".join(out) + "\n"

@@ -321,12 +321,37 @@ def _deformation_path(phi) -> str:
     raise TypeError(f"expected a MatchResult or a deformation.vdb path, got {type(phi).__name__}")
 
 
-def consistency(phi, psi, source, target, **parameters) -> dict:
+def _report_of(phi) -> dict | None:
+    """The report.json next to a deformation, or None."""
+    if isinstance(phi, MatchResult):
+        return phi.report
+    path = os.path.join(os.path.dirname(os.path.abspath(_deformation_path(phi))), "report.json")
+    if os.path.isfile(path):
+        with open(path) as f:
+            return json.load(f)
+    return None
+
+
+def consistency(phi, psi, source=None, target=None, **parameters) -> dict:
     """|psi o phi - Id| on M1 and |phi o psi - Id| on M2 (``vdb_match consistency --json``).
 
     phi, psi: MatchResults or deformation.vdb paths of the two directions (source -> target
-    and target -> source); source, target: the shapes M1 and M2.
+    and target -> source). source, target: the shapes M1 and M2; by default those phi was
+    matched from, as its report.json names them (with their grids).
     """
+    if source is None or target is None:
+        report = _report_of(phi)
+        if report is None:
+            raise ValueError("consistency: give source and target (no report.json next to phi)")
+        for key, given in (("source", source), ("target", target)):
+            if given is None:
+                entry = report[key]
+                if key == "source":
+                    source = entry["path"]
+                else:
+                    target = entry["path"]
+                if entry.get("grid") and parameters.get(key + "_grid") is None:
+                    parameters[key + "_grid"] = entry["grid"]
     work = _Workspace()
     try:
         args = ["consistency", _deformation_path(phi), _deformation_path(psi),

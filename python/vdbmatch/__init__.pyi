@@ -105,8 +105,8 @@ def energy(
 def consistency(
     phi: MatchResult | Path,
     psi: MatchResult | Path,
-    source: Shape,
-    target: Shape,
+    source: Shape | None = None,
+    target: Shape | None = None,
     *,
     source_grid: str | None = None,
     target_grid: str | None = None,

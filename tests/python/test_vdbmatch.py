@@ -163,6 +163,7 @@ def test_energy_is_symmetric_at_the_identity_and_consistency_is_small():
     forward = vdbmatch.match(FIGURE_A, FIGURE_B, progress=False, levels="4..6")
     backward = vdbmatch.match(FIGURE_B, FIGURE_A, progress=False, levels="4..6")
     c = vdbmatch.consistency(forward, backward, FIGURE_A, FIGURE_B)
+    assert c == vdbmatch.consistency(forward, backward)  # the shapes named by phi's report
     assert c["dimension"] == 2
     assert 0 < c["psi_phi"]["relative"]["shape_mean"] < 0.02
     assert 0 < c["phi_psi"]["relative"]["shape_mean"] < 0.02
