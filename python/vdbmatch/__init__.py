@@ -388,6 +388,7 @@ class MatchResult:
         self._workspace = _workspace
         self._report = None
         self._deformation = None
+        self._grids = {}
 
     def __repr__(self) -> str:
         r = self.report
@@ -404,12 +405,13 @@ class MatchResult:
         return self._report
 
     def _grid(self, filename: str):
-        import pyopenvdb
+        """The grid of @a filename, read once (None if the run did not write the file)."""
+        if filename not in self._grids:
+            import pyopenvdb
 
-        path = os.path.join(self.folder, filename)
-        if not os.path.isfile(path):
-            return None
-        return pyopenvdb.readAll(path)[0][0]
+            path = os.path.join(self.folder, filename)
+            self._grids[filename] = pyopenvdb.readAll(path)[0][0] if os.path.isfile(path) else None
+        return self._grids[filename]
 
     @property
     def displacement(self):
