@@ -69,6 +69,17 @@ commands()
          "sets rebuilt around the moved surface, other grids resampled) by phi, or by its exact "
          "inverse with --inverse",
          &applyOptionHelp},
+        {"batch",
+         "batch (--all-pairs FILES... | --template T FILES... | --sequence PATTERN --frames A-B) "
+         "-o OUTDIR [-- MATCH OPTIONS]; batch status OUTDIR; batch collect OUTDIR",
+         "run many matches as the jobs of one plan (every pair of FILES, T to each FILE, or frame "
+         "k to k+1 of a sequence), each an ordinary match with the MATCH OPTIONS after -- in "
+         "OUTDIR/jobs/SOURCE--TARGET, on this machine in child processes (one per core, one "
+         "thread each); OUTDIR/plan.json records the jobs and their states, and the same "
+         "command again resumes (finished jobs with whole outputs are skipped, the others "
+         "redone); a failing job does not stop the others. 'batch status' prints the jobs, "
+         "'batch collect' writes OUTDIR/distances.csv and summary.json (docs/batch.md)",
+         &batchOptionHelp},
     };
     return table;
 }
@@ -114,6 +125,8 @@ exitCodeHelp()
     s += wrapHelp("4", "match --strict: the finest level did not converge (outputs written)");
     s += wrapHelp("5", "interrupted (SIGINT, SIGTERM); match writes what was computed, marked "
                        "as interrupted");
+    s += wrapHelp("6", "batch: every job ran but some failed (each listed with its error; "
+                       "running the command again redoes them)");
     s += "\nErrors are printed to stderr as one line 'vdb_match: error: ...'.\n";
     return s;
 }
@@ -200,6 +213,7 @@ commandOptions(const std::string& command)
     if (command == "slice") return sliceOptionDescriptions();
     if (command == "texture") return textureOptionDescriptions();
     if (command == "apply") return applyOptionDescriptions();
+    if (command == "batch") return batchOptionDescriptions();
     return {};
 }
 
@@ -260,6 +274,7 @@ run(int argc, const char* const* argv, std::ostream& out, std::ostream& err)
             if (command == "slice") return runSliceCommand(argc, argv, first, out, err);
             if (command == "texture") return runTextureCommand(argc, argv, first, out, err);
             if (command == "apply") return runApplyCommand(argc, argv, first, out, err);
+            if (command == "batch") return runBatchCommand(argc, argv, first, out, err);
             return runMatchCommand(argc, argv, first, out, err);
         } catch (const HelpRequested&) {
             out << commandHelpText(command);

@@ -7,6 +7,8 @@
 /// `vdb_match consistency PHI.vdb PSI.vdb --source M1 --target M2 [options]`,
 /// `vdb_match slice PHI.vdb --source M1 --target M2 -o OUT.exr [options]`,
 /// `vdb_match apply DEFORMATION.vdb INPUT -o OUTPUT [--inverse] [options]`,
+/// `vdb_match batch (--all-pairs FILES... | --template T FILES... | --sequence P --frames A-B)
+///  -o OUTDIR [options] [-- MATCH OPTIONS]`, `vdb_match batch status|collect OUTDIR`,
 /// `vdb_match --help`, `--version`.
 /// Results go to the output stream, progress and errors to the error stream (errors as one line
 /// `vdb_match: error: ...`). See docs/cli.md.
@@ -33,7 +35,8 @@ enum ExitCode : int {
     EXIT_IO = 2,            ///< missing or unreadable file
     EXIT_INVALID_INPUT = 3, ///< not a level set, ambiguous grid, NaN, empty, out-of-range values
     EXIT_NOT_CONVERGED = 4, ///< reserved for `match --strict`
-    EXIT_INTERRUPTED = 5    ///< SIGINT or SIGTERM
+    EXIT_INTERRUPTED = 5,   ///< SIGINT or SIGTERM
+    EXIT_JOBS_FAILED = 6    ///< batch: every job ran, some failed (listed in the summary)
 };
 
 /// A command-line error (exit code EXIT_USAGE).
@@ -105,6 +108,9 @@ std::vector<OptionDescription> consistencyOptionDescriptions();
 std::vector<OptionDescription> sliceOptionDescriptions();
 std::vector<OptionDescription> textureOptionDescriptions();
 std::vector<OptionDescription> applyOptionDescriptions();
+std::vector<OptionDescription> batchOptionDescriptions();
+/// The option lines of `batch`, with their defaults.
+std::string batchOptionHelp();
 /// The help page of `apply` (usage, directions, options).
 std::string applyHelpText();
 
@@ -130,6 +136,8 @@ int runApplyCommand(int argc, const char* const* argv, int first, std::ostream& 
                     std::ostream& err);
 int runTextureCommand(int argc, const char* const* argv, int first, std::ostream& out,
                       std::ostream& err);
+int runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
+                    std::ostream& err);
 
 /// Runs the command line and returns the exit code. Writes results to @a out and progress and
 /// errors to @a err. Installs SIGINT/SIGTERM handlers for the duration of a command.

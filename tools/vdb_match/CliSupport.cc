@@ -13,6 +13,10 @@
 #include <limits>
 #include <sstream>
 
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
 namespace vdbmatch {
 namespace cli {
 
@@ -466,6 +470,35 @@ void
 checkInterrupted()
 {
     if (wasSignalled()) throw Interrupted{};
+}
+
+std::string
+duration(double seconds)
+{
+    if (!std::isfinite(seconds) || seconds < 0) return "?";
+    if (seconds < 60) return fixed("%.1fs", seconds);
+    const int s = int(std::lround(seconds));
+    if (s < 3600) return std::to_string(s / 60) + "m" + fixed("%02.0fs", double(s % 60));
+    return std::to_string(s / 3600) + "h" + fixed("%02.0fm", double((s % 3600) / 60));
+}
+
+OutputLock::OutputLock(const std::string& dir)
+{
+    const std::string path = (std::filesystem::path(dir) / ".vdb_match.lock").string();
+    mFd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (mFd < 0) {
+        OPENVDB_THROW(openvdb::IoError, "cannot create '" << path << "': " << std::strerror(errno));
+    }
+    if (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
+        ::close(mFd);
+        OPENVDB_THROW(openvdb::IoError, "another vdb_match is writing to '"
+                                            << dir << "'; wait for it or choose another -o");
+    }
+}
+
+OutputLock::~OutputLock()
+{
+    ::close(mFd);
 }
 
 double

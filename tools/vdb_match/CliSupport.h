@@ -229,6 +229,23 @@ void checkInterrupted();
 
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0);
+/// A duration as "12.3s", "4m05s" or "1h02m" ("?" if not finite).
+std::string duration(double seconds);
+
+/// An exclusive advisory lock (flock) on OUTDIR/.vdb_match.lock while a command writes there;
+/// the kernel releases it when the process ends, however it ends. Not inherited by children.
+class OutputLock
+{
+public:
+    /// @throw openvdb::IoError if the lock file cannot be created or another process holds it
+    explicit OutputLock(const std::string& dir);
+    ~OutputLock();
+    OutputLock(const OutputLock&) = delete;
+    OutputLock& operator=(const OutputLock&) = delete;
+
+private:
+    int mFd = -1;
+};
 
 /// JSON documents of the commands: nlohmann's ordered JSON keeps keys in insertion order; numbers
 /// are written in their shortest round-trip form, NaN and infinities as null.

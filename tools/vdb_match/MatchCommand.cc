@@ -366,15 +366,6 @@ parseMatchOptions(int argc, const char* const* argv, int first)
 ////////////////////////////////////////////////////////////////////////////////
 // Progress
 
-std::string
-duration(double seconds)
-{
-    if (!std::isfinite(seconds) || seconds < 0) return "?";
-    if (seconds < 60) return fixed("%.1fs", seconds);
-    const int s = int(std::lround(seconds));
-    if (s < 3600) return std::to_string(s / 60) + "m" + fixed("%02.0fs", double(s % 60));
-    return std::to_string(s / 3600) + "h" + fixed("%02.0fm", double((s % 3600) / 60));
-}
 
 std::string
 termsText(const EnergyTerms& t)
@@ -555,32 +546,6 @@ inputJson(const Shape& in)
     return j;
 }
 
-/// An exclusive advisory lock (flock) on OUTDIR/.vdb_match.lock while a match writes there;
-/// the kernel releases it when the process ends, however it ends.
-class OutputLock
-{
-public:
-    explicit OutputLock(const std::string& dir)
-    {
-        const std::string path = (std::filesystem::path(dir) / ".vdb_match.lock").string();
-        mFd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-        if (mFd < 0) {
-            OPENVDB_THROW(openvdb::IoError,
-                          "cannot create '" << path << "': " << std::strerror(errno));
-        }
-        if (::flock(mFd, LOCK_EX | LOCK_NB) != 0) {
-            ::close(mFd);
-            OPENVDB_THROW(openvdb::IoError, "another vdb_match is writing to '"
-                                                << dir << "'; wait for it or choose another -o");
-        }
-    }
-    ~OutputLock() { ::close(mFd); }
-    OutputLock(const OutputLock&) = delete;
-    OutputLock& operator=(const OutputLock&) = delete;
-
-private:
-    int mFd = -1;
-};
 
 /// What was written besides deformation.vdb, for report.json.
 struct ExtraOutputs

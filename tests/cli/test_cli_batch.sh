@@ -1,0 +1,134 @@
+#!/usr/bin/env bash
+# CLI tests of `vdb_match batch`: plans (all pairs, template, sequence), plan.json states, resume
+# (finished jobs skipped, a job with missing outputs redone), a failing job that does not stop
+# the others (exit code 6), an interrupted batch (exit code 5, jobs redone on resume), bad input
+# (missing frame, duplicated names, another plan in OUTDIR, options batch sets itself), status,
+# and collect (distances.csv, summary.json with |psi o phi - Id| where both directions ran).
+# Usage: test_cli_batch.sh VDB_MATCH ASSETS_DIR
+set -uo pipefail
+
+VDB_MATCH=${1:?usage: test_cli_batch.sh VDB_MATCH ASSETS_DIR}
+ASSETS=${2:?usage: test_cli_batch.sh VDB_MATCH ASSETS_DIR}
+SCRATCH=$(mktemp -d "${TMPDIR:-/tmp}/vdbmatch-cli-batch.XXXXXX")
+trap 'rm -rf "$SCRATCH"' EXIT
+
+source "$(dirname "$0")/common.sh"
+find_python "json"
+
+# expect NAME CONDITION...: a check on the state left behind.
+expect() {
+    local name=$1
+    shift
+    count=$((count + 1))
+    if "$@"; then echo "ok   $name"; else fail "$name"; fi
+}
+# state DIR JOB: the job's state in DIR/plan.json.
+state() {
+    "$PYTHON" -c "import json,sys; p=json.load(open(sys.argv[1]+'/plan.json')); print([j['state'] for j in p['jobs'] if j['name']==sys.argv[2]][0])" "$1" "$2"
+}
+
+S=$SCRATCH/shapes
+mkdir -p "$S"
+cp "$ASSETS/figure_a.polyline" "$S/a.polyline"
+cp "$ASSETS/figure_b.polyline" "$S/b.polyline"
+awk '/^#/ || NF == 0 {print; next} {printf "%.6f %.6f\n", $1 * 1.08, $2 * 0.95}' "$S/a.polyline" >"$S/c.polyline"
+LEVELS=(-- --levels 4..5)
+
+# All pairs, then the same command again: nothing to do.
+check "all pairs: 3 jobs done" 0 '3/3 done, 0 failed' 'a--b done' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" "$S/c.polyline" -o "$SCRATCH/pairs" "${LEVELS[@]}"
+expect "all pairs: each job is a match folder" test -s "$SCRATCH/pairs/jobs/b--c/deformation.vdb" -a -s "$SCRATCH/pairs/jobs/b--c/report.json"
+expect "all pairs: plan.json says done" [ "$(state "$SCRATCH/pairs" a--c)" = done ]
+check "resume: finished jobs skipped" 0 '3/3 done' '3 jobs \(3 already done\)' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" "$S/c.polyline" -o "$SCRATCH/pairs" "${LEVELS[@]}"
+rm "$SCRATCH/pairs/jobs/a--c/deformation.vdb"
+check "resume: a job whose outputs are not whole is redone" 0 '3/3 done' '\(2 already done\)' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" "$S/c.polyline" -o "$SCRATCH/pairs" "${LEVELS[@]}"
+expect "resume: that job, and only it, ran again" grep -q 'batch: a--c done' "$SCRATCH/err"
+expect "resume: its outputs are back" test -s "$SCRATCH/pairs/jobs/a--c/deformation.vdb"
+check "another plan in the same OUTDIR is refused" 1 '' 'holds another batch' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" -o "$SCRATCH/pairs" "${LEVELS[@]}"
+check "status" 0 '3 jobs: 3 done, 0 failed' '' -- batch status "$SCRATCH/pairs"
+
+# Collect: a symmetric matrix with zeros on the diagonal, and the summary.
+check "collect" 0 'distances.csv' '' -- batch collect "$SCRATCH/pairs"
+count=$((count + 1))
+result=$("$PYTHON" - "$SCRATCH/pairs" <<'PY'
+import csv, json, sys
+d = sys.argv[1]
+rows = list(csv.reader(open(d + "/distances.csv")))
+names = rows[0][1:]
+m = {r[0]: dict(zip(names, map(float, r[1:]))) for r in rows[1:]}
+s = json.load(open(d + "/summary.json"))
+e = {r["name"]: r["energy"] for r in s["results"]}
+ok = names == ["a", "b", "c"] and all(m[x][x] == 0 for x in names)
+ok = ok and all(m[x][y] == m[y][x] > 0 for x in names for y in names if x != y)
+ok = ok and abs(m["a"]["b"] - e["a--b"]) <= 1e-6 * e["a--b"] and s["done"] == 3
+print("ok" if ok else f"bad matrix or summary: {m} {e}")
+PY
+)
+[ "$result" = ok ] && echo "ok   collect: distances.csv symmetric, energies of summary.json" || fail "collect: $result"
+
+# A job that fails (a shape the reader refuses) does not stop the others: exit code 6.
+printf '# one point\n1 2\n' >"$S/bad.polyline"
+count=$((count + 1))
+"$VDB_MATCH" batch --template "$S/a.polyline" "$S/b.polyline" "$S/bad.polyline" -o "$SCRATCH/tpl" --quiet "${LEVELS[@]}" >"$SCRATCH/out" 2>"$SCRATCH/err"
+code=$?
+if [ $code -eq 6 ] && grep -q 'failed: a--bad: readPolyline' "$SCRATCH/out" && [ "$(state "$SCRATCH/tpl" a--b)" = done ] \
+    && [ "$(state "$SCRATCH/tpl" a--bad)" = failed ]; then
+    echo "ok   a failing job: exit code 6, listed with its error, the others done"
+else
+    fail "a failing job: exit code $code; $(cat "$SCRATCH/out" "$SCRATCH/err")"
+fi
+
+# Sequences: Blender's #### and Houdini's \$F4; a missing frame is an I/O error.
+mkdir -p "$SCRATCH/seq"
+for k in 1 2 3; do cp "$S/a.polyline" "$SCRATCH/seq/shape.000$k.polyline"; done
+check "sequence ####: frame k -> k+1" 0 '2/2 done' 'shape.0002--shape.0003 done' -- \
+    batch --sequence "$SCRATCH/seq/shape.####.polyline" --frames 1-3 -o "$SCRATCH/seqout" "${LEVELS[@]}"
+check "sequence \$F4 names the same frames" 0 '2/2 done' '' -- \
+    batch --sequence "$SCRATCH/seq/shape.\$F4.polyline" --frames 1-3 -o "$SCRATCH/seqout" "${LEVELS[@]}"
+check "sequence: a missing frame" 2 '' 'frame 4 of the sequence is missing' -- \
+    batch --sequence "$SCRATCH/seq/shape.####.polyline" --frames 1-4 -o "$SCRATCH/seq2" "${LEVELS[@]}"
+expect "sequence: nothing written for a refused plan" test ! -e "$SCRATCH/seq2/plan.json"
+
+# Usage errors.
+mkdir -p "$SCRATCH/dup"
+cp "$S/a.polyline" "$SCRATCH/dup/a.polyline"
+check "duplicated names" 1 '' 'duplicated names' -- \
+    batch --all-pairs "$S/a.polyline" "$SCRATCH/dup/a.polyline" -o "$SCRATCH/d"
+check "no plan" 1 '' 'exactly one of' -- batch "$S/a.polyline" -o "$SCRATCH/d"
+check "-o after -- is batch's" 1 '' 'set by batch' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" -o "$SCRATCH/d" -- -o x
+check "a missing shape" 2 '' 'cannot read the shape' -- \
+    batch --all-pairs "$S/a.polyline" "$S/nothere.polyline" -o "$SCRATCH/d"
+check "status of a folder without a batch" 2 '' 'no plan.json' -- batch status "$SCRATCH"
+
+# Ctrl-C: the running jobs stop, the batch exits 5, and the same command redoes them.
+"$VDB_MATCH" batch --all-pairs "$ASSETS/sphere.vdb" "$ASSETS/ellipsoid.vdb" --both-directions \
+    -o "$SCRATCH/int" --quiet -- --levels 4..6 >"$SCRATCH/out" 2>"$SCRATCH/err" &
+pid=$!
+for _ in $(seq 1 100); do
+    [ -s "$SCRATCH/int/jobs/sphere--ellipsoid/log.txt" ] || [ -d "$SCRATCH/int/jobs/sphere--ellipsoid" ] && break
+    sleep 0.1
+done
+sleep 1
+kill -INT $pid
+wait $pid
+code=$?
+count=$((count + 1))
+st=$(state "$SCRATCH/int" sphere--ellipsoid)
+if [ $code -eq 5 ] && [ "$st" = interrupted ]; then echo "ok   interrupted: exit code 5, jobs marked interrupted"; else fail "interrupted: exit $code, state $st"; fi
+check "interrupted jobs are redone" 0 '2/2 done' '\(0 already done\)' -- \
+    batch --all-pairs "$ASSETS/sphere.vdb" "$ASSETS/ellipsoid.vdb" --both-directions -o "$SCRATCH/int" -- --levels 4..6
+check "collect with both directions" 0 '2 of 2 jobs done' '' -- batch collect "$SCRATCH/int"
+count=$((count + 1))
+result=$("$PYTHON" -c "
+import json,sys
+s=json.load(open(sys.argv[1]+'/summary.json'))
+v=[r['psiPhiMinusId']['relative']['shape_mean'] for r in s['results']]
+print('ok' if all(0 < x < 0.02 for x in v) else v)" "$SCRATCH/int")
+[ "$result" = ok ] && echo "ok   collect: |psi o phi - Id| of both directions" || fail "collect consistency: $result"
+
+echo "$((count - failures))/$count batch checks passed"
+[ "$failures" -eq 0 ]

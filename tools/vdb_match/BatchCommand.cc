@@ -1,0 +1,748 @@
+/// @file BatchCommand.cc
+/// @brief `vdb_match batch`: many matches as jobs of one plan. A plan is all pairs of a
+///        collection, a template matched to each shape, or the consecutive frames of a sequence;
+///        each job is an ordinary `match` (same options, same outputs) in OUTDIR/jobs/NAME, run
+///        by a child vdb_match process on this machine. OUTDIR/plan.json records the jobs and
+///        their states, so that running the same command again resumes; `batch status` prints
+///        it and `batch collect` writes distances.csv and summary.json (docs/batch.md).
+#include "CliSupport.h"
+
+#include <vdbmatch/io/AtomicFile.h>
+
+#include <openvdb/io/File.h>
+
+#include <fcntl.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <csignal>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace vdbmatch {
+namespace cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct BatchCliOptions
+{
+    bool allPairs = false;
+    std::string templateShape;
+    std::string sequence;
+    std::string frames;
+    bool bothDirections = false;
+    std::string outDir;
+    int jobs = 0;          ///< concurrent jobs, 0: automatic
+    int threadsPerJob = 0; ///< 0: automatic
+    bool quiet = false;
+};
+
+std::vector<Option<BatchCliOptions>>
+batchOptionTable()
+{
+    using O = BatchCliOptions;
+    // clang-format off
+    return {
+        {"--all-pairs", nullptr, "Plan",
+         "match every pair of the FILES (i < j: one direction; the symmetric energy makes it "
+         "enough for a distance)",
+         [](O& o, const std::string&) { o.allPairs = true; }},
+        {"--both-directions", nullptr, "Plan",
+         "with --all-pairs, also match j -> i (for |psi o phi - Id| in batch collect)",
+         [](O& o, const std::string&) { o.bothDirections = true; }},
+        {"--template", "T", "Plan", "match the shape T to each of the FILES",
+         [](O& o, const std::string& v) { o.templateShape = v; }},
+        {"--sequence", "PATTERN", "Plan",
+         "frames of a sequence: shape.####.vdb (Blender), shape.$F4.vdb (Houdini) or "
+         "shape.%04d.vdb; frame k is matched to frame k+1",
+         [](O& o, const std::string& v) { o.sequence = v; }},
+        {"--frames", "A-B", "Plan", "the frame range of --sequence, e.g. 1-240",
+         [](O& o, const std::string& v) { o.frames = v; }},
+        {"--output,-o", "OUTDIR", "Output",
+         "batch directory: plan.json and jobs/NAME/ (the outputs of each match) (required)",
+         [](O& o, const std::string& v) { o.outDir = v; }},
+        {"--jobs", "N", "Execution",
+         "concurrent jobs (default: one per core, see --threads-per-job)",
+         [](O& o, const std::string& v) { o.jobs = parseInt("--jobs", v); }},
+        {"--threads-per-job", "N", "Execution",
+         "threads of each job (default: the cores divided among the jobs running, at least 1)",
+         [](O& o, const std::string& v) { o.threadsPerJob = parseInt("--threads-per-job", v); }},
+        {"--quiet", nullptr, "Execution", "no progress on stderr (errors are still printed)",
+         [](O& o, const std::string&) { o.quiet = true; }},
+    };
+    // clang-format on
+}
+
+/// One job of a plan.
+struct Job
+{
+    std::string name;
+    std::string source, target; ///< absolute paths
+    std::string state = "pending"; ///< pending, done, failed, interrupted
+    int exitCode = -1;
+    std::string error;
+    double seconds = 0;
+    double peakMemoryMB = 0;
+};
+
+struct Plan
+{
+    std::string kind; ///< all-pairs, template, sequence
+    std::vector<std::string> inputs;
+    std::vector<std::string> matchArguments;
+    std::vector<Job> jobs;
+};
+
+std::string
+absolutePath(const std::string& p)
+{
+    std::error_code ec;
+    const fs::path a = fs::absolute(p, ec);
+    return (ec ? fs::path(p) : a.lexically_normal()).string();
+}
+
+/// The name of a shape in job names: its file name without the extension.
+std::string
+stemOf(const std::string& path)
+{
+    return fs::path(path).stem().string();
+}
+
+void
+requireReadable(const std::string& path, const std::string& what)
+{
+    std::ifstream f(path, std::ios::binary);
+    if (!f) {
+        OPENVDB_THROW(openvdb::IoError, what << " '" << path << "': " << std::strerror(errno));
+    }
+}
+
+/// The frame files of a sequence pattern: #### (as many digits as #), $F4 or %04d.
+std::vector<std::string>
+sequenceFiles(const std::string& pattern, const std::string& range)
+{
+    int a = 0, b = -1;
+    {
+        const auto dash = range.find('-', 1);
+        if (dash == std::string::npos) throw UsageError("--frames: expected A-B, got '" + range + "'");
+        a = parseInt("--frames", range.substr(0, dash));
+        b = parseInt("--frames", range.substr(dash + 1));
+        if (b <= a) throw UsageError("--frames: " + range + " needs at least two frames (A < B)");
+    }
+    std::string prefix, suffix;
+    int width = 0;
+    if (auto p = pattern.find('#'); p != std::string::npos) {
+        auto q = pattern.find_first_not_of('#', p);
+        if (q == std::string::npos) q = pattern.size();
+        prefix = pattern.substr(0, p), suffix = pattern.substr(q), width = int(q - p);
+    } else if (auto f = pattern.find("$F"); f != std::string::npos) {
+        std::size_t q = f + 2;
+        while (q < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[q])))
+            ++q;
+        width = q > f + 2 ? std::stoi(pattern.substr(f + 2, q - f - 2)) : 1;
+        prefix = pattern.substr(0, f), suffix = pattern.substr(q);
+    } else if (auto d = pattern.find('%'); d != std::string::npos) {
+        std::size_t q = d + 1;
+        while (q < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[q])))
+            ++q;
+        if (q >= pattern.size() || pattern[q] != 'd')
+            throw UsageError("--sequence: unsupported pattern '" + pattern + "'");
+        const std::string digits = pattern.substr(d + 1, q - d - 1);
+        width = digits.empty() ? 1 : std::stoi(digits);
+        prefix = pattern.substr(0, d), suffix = pattern.substr(q + 1);
+    } else {
+        throw UsageError("--sequence: '" + pattern +
+                         "' has no frame number (use ####, $F4 or %04d)");
+    }
+    std::vector<std::string> files;
+    for (int k = a; k <= b; ++k) {
+        std::string n = std::to_string(k);
+        if (int(n.size()) < width) n.insert(0, std::size_t(width) - n.size(), '0');
+        const std::string file = prefix + n + suffix;
+        std::error_code ec;
+        if (!fs::exists(file, ec)) {
+            OPENVDB_THROW(openvdb::IoError,
+                          "frame " << k << " of the sequence is missing: '" << file << "'");
+        }
+        files.push_back(file);
+    }
+    return files;
+}
+
+Plan
+makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
+         const std::vector<std::string>& matchArgs)
+{
+    const int kinds = int(o.allPairs) + int(!o.templateShape.empty()) + int(!o.sequence.empty());
+    if (kinds != 1)
+        throw UsageError("batch: give exactly one of --all-pairs, --template T, --sequence PATTERN");
+    if (o.bothDirections && !o.allPairs)
+        throw UsageError("--both-directions goes with --all-pairs");
+    Plan plan;
+    plan.matchArguments = matchArgs;
+    std::vector<std::string> shapes;
+    if (!o.sequence.empty()) {
+        if (!files.empty()) throw UsageError("--sequence takes no FILES");
+        if (o.frames.empty()) throw UsageError("--sequence needs --frames A-B");
+        plan.kind = "sequence";
+        shapes = sequenceFiles(o.sequence, o.frames);
+    } else {
+        if (!o.frames.empty()) throw UsageError("--frames goes with --sequence");
+        plan.kind = o.allPairs ? "all-pairs" : "template";
+        if (!o.templateShape.empty()) shapes.push_back(o.templateShape);
+        shapes.insert(shapes.end(), files.begin(), files.end());
+        const std::size_t minimum = o.allPairs ? 2 : 2;
+        if (shapes.size() < minimum) {
+            throw UsageError(o.allPairs ? "--all-pairs needs at least two FILES"
+                                        : "--template T needs at least one FILE");
+        }
+    }
+    // Names: file names without extension, unique.
+    std::map<std::string, std::string> byName;
+    for (const std::string& s : shapes) {
+        requireReadable(s, "cannot read the shape");
+        const std::string n = stemOf(s);
+        auto [it, fresh] = byName.emplace(n, s);
+        if (!fresh && absolutePath(it->second) != absolutePath(s)) {
+            throw UsageError("duplicated names: '" + it->second + "' and '" + s +
+                             "' would both be called '" + n + "' in the job names; rename one");
+        }
+        plan.inputs.push_back(absolutePath(s));
+    }
+    auto add = [&](std::size_t i, std::size_t j) {
+        Job job;
+        job.name = stemOf(plan.inputs[i]) + "--" + stemOf(plan.inputs[j]);
+        job.source = plan.inputs[i];
+        job.target = plan.inputs[j];
+        plan.jobs.push_back(job);
+    };
+    const std::size_t n = plan.inputs.size();
+    if (plan.kind == "all-pairs") {
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t j = i + 1; j < n; ++j) {
+                add(i, j);
+                if (o.bothDirections) add(j, i);
+            }
+    } else if (plan.kind == "template") {
+        for (std::size_t j = 1; j < n; ++j)
+            if (plan.inputs[j] != plan.inputs[0]) add(0, j);
+    } else {
+        for (std::size_t k = 0; k + 1 < n; ++k)
+            add(k, k + 1);
+    }
+    std::set<std::string> names;
+    for (const Job& j : plan.jobs)
+        if (!names.insert(j.name).second)
+            throw UsageError("duplicated job name '" + j.name + "' (a shape listed twice?)");
+    return plan;
+}
+
+Json
+planJson(const Plan& p)
+{
+    Json jobs = Json::array();
+    for (const Job& j : p.jobs) {
+        jobs.push_back(Json{{"name", j.name},
+                            {"source", j.source},
+                            {"target", j.target},
+                            {"directory", "jobs/" + j.name},
+                            {"state", j.state},
+                            {"exitCode", j.exitCode},
+                            {"error", j.error},
+                            {"seconds", j.seconds},
+                            {"peakMemoryMB", j.peakMemoryMB}});
+    }
+    return Json{{"vdbmatch", VDBMATCH_VERSION},
+                {"plan", p.kind},
+                {"inputs", p.inputs},
+                {"matchArguments", p.matchArguments},
+                {"executor", "local"},
+                {"jobs", jobs}};
+}
+
+void
+writePlan(const std::string& outDir, const Plan& p)
+{
+    const std::string text = dumpJson(planJson(p));
+    writeFileAtomically((fs::path(outDir) / "plan.json").string(),
+                        [&](std::ostream& os) { os << text; });
+}
+
+Plan
+readPlan(const std::string& outDir)
+{
+    const std::string path = (fs::path(outDir) / "plan.json").string();
+    std::ifstream f(path);
+    if (!f) OPENVDB_THROW(openvdb::IoError, "no batch in '" << outDir << "' (no plan.json)");
+    Json j;
+    try {
+        j = Json::parse(f);
+        Plan p;
+        p.kind = j.at("plan").get<std::string>();
+        p.inputs = j.at("inputs").get<std::vector<std::string>>();
+        p.matchArguments = j.at("matchArguments").get<std::vector<std::string>>();
+        for (const Json& e : j.at("jobs")) {
+            Job job;
+            job.name = e.at("name").get<std::string>();
+            job.source = e.at("source").get<std::string>();
+            job.target = e.at("target").get<std::string>();
+            job.state = e.at("state").get<std::string>();
+            job.exitCode = e.value("exitCode", -1);
+            job.error = e.value("error", std::string());
+            job.seconds = e.value("seconds", 0.0);
+            job.peakMemoryMB = e.value("peakMemoryMB", 0.0);
+            p.jobs.push_back(job);
+        }
+        return p;
+    } catch (const Json::exception& e) {
+        OPENVDB_THROW(openvdb::ValueError, "'" << path << "' is not a batch plan: " << e.what());
+    }
+}
+
+std::string
+jobDir(const std::string& outDir, const Job& j)
+{
+    return (fs::path(outDir) / "jobs" / j.name).string();
+}
+
+/// A finished job's outputs are there and whole: report.json of a run that was not
+/// interrupted, and deformation.vdb with its displacement grid.
+bool
+outputsVerified(const std::string& dir, std::string* why = nullptr)
+{
+    auto fail = [&](const std::string& w) {
+        if (why) *why = w;
+        return false;
+    };
+    std::ifstream f(fs::path(dir) / "report.json");
+    if (!f) return fail("no report.json");
+    try {
+        const Json r = Json::parse(f);
+        const std::string status = r.at("status").get<std::string>();
+        if (status != "converged" && status != "not converged")
+            return fail("report.json says " + status);
+    } catch (const Json::exception&) {
+        return fail("report.json is not valid JSON");
+    }
+    try {
+        openvdb::io::File file((fs::path(dir) / "deformation.vdb").string());
+        file.open(false);
+        const bool has = file.hasGrid("displacement");
+        file.close();
+        if (!has) return fail("deformation.vdb has no displacement grid");
+    } catch (const openvdb::Exception& e) {
+        return fail(std::string("deformation.vdb: ") + e.what());
+    }
+    return true;
+}
+
+/// The last "error:" line of a job's log, or "".
+std::string
+lastErrorLine(const std::string& logPath)
+{
+    std::ifstream f(logPath);
+    std::string line, last;
+    while (std::getline(f, line))
+        if (line.find("error:") != std::string::npos) last = line;
+    const std::string prefix = std::string(PROGRAM) + ": error: ";
+    if (last.rfind(prefix, 0) == 0) last = last.substr(prefix.size());
+    return last;
+}
+
+/// This program, to start the jobs with.
+std::string
+selfExecutable()
+{
+    std::error_code ec;
+    const fs::path p = fs::read_symlink("/proc/self/exe", ec);
+    if (ec) OPENVDB_THROW(openvdb::IoError, "cannot find the vdb_match executable: " << ec.message());
+    return p.string();
+}
+
+struct Child
+{
+    pid_t pid = -1;
+    std::size_t job = 0;
+    Clock::time_point start;
+};
+
+/// Starts `vdb_match match SOURCE TARGET -o DIR --quiet --threads T ARGS...`, output to DIR/log.txt.
+pid_t
+startJob(const std::string& exe, const std::string& outDir, const Job& job,
+         const std::vector<std::string>& matchArgs, int threads)
+{
+    const std::string dir = jobDir(outDir, job);
+    createOutputDirectory(dir);
+    std::vector<std::string> args = {exe,        "match",  job.source, job.target,
+                                     "-o",       dir,      "--quiet",  "--threads",
+                                     std::to_string(threads)};
+    args.insert(args.end(), matchArgs.begin(), matchArgs.end());
+    std::vector<char*> argv;
+    for (std::string& a : args)
+        argv.push_back(a.data());
+    argv.push_back(nullptr);
+    const std::string log = (fs::path(dir) / "log.txt").string();
+    const pid_t pid = fork();
+    if (pid < 0) OPENVDB_THROW(openvdb::IoError, "cannot start a job: " << std::strerror(errno));
+    if (pid == 0) {
+        // The child: its own output, this program as `match`. Only async-signal-safe calls.
+        std::signal(SIGINT, SIG_DFL);
+        std::signal(SIGTERM, SIG_DFL);
+        const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd >= 0) {
+            dup2(fd, 1);
+            dup2(fd, 2);
+            close(fd);
+        }
+        execv(argv[0], argv.data());
+        _exit(127);
+    }
+    return pid;
+}
+
+int
+countState(const Plan& p, const std::string& state)
+{
+    return int(std::count_if(p.jobs.begin(), p.jobs.end(),
+                             [&](const Job& j) { return j.state == state; }));
+}
+
+int
+runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& err)
+{
+    auto say = [&](const std::string& text) {
+        if (!o.quiet) err << PROGRAM << ": " << text << std::endl;
+    };
+    // Jobs whose outputs are there and whole are skipped; the others are (re)done.
+    std::vector<std::size_t> todo;
+    int skipped = 0;
+    for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+        Job& j = plan.jobs[i];
+        if (j.state == "done" && outputsVerified(jobDir(o.outDir, j))) {
+            ++skipped;
+            continue;
+        }
+        j.state = "pending";
+        j.error.clear();
+        j.exitCode = -1;
+        todo.push_back(i);
+    }
+    writePlan(o.outDir, plan);
+    const int cores = std::max(1, int(std::thread::hardware_concurrency()));
+    // One job per core with one thread each: the 1 -> 2 thread speed-up of a match is 1.78-1.86
+    // (docs/performance.md), so two 1-thread jobs finish more work per second than one 2-thread
+    // job; when fewer jobs than cores are left, each gets the cores left over.
+    const int concurrency = o.jobs > 0 ? o.jobs : cores;
+    say("batch: " + plan.kind + ", " + std::to_string(plan.jobs.size()) + " jobs (" +
+        std::to_string(skipped) + " already done), " + std::to_string(concurrency) +
+        " at a time, in " + o.outDir);
+    const std::string exe = selfExecutable();
+    const Clock::time_point start = Clock::now();
+    std::vector<Child> running;
+    std::size_t next = 0;
+    double finishedSeconds = 0;
+    int finished = 0;
+    bool stopping = false;
+    while (next < todo.size() || !running.empty()) {
+        if (wasSignalled() && !stopping) {
+            stopping = true;
+            say("batch: interrupted; stopping the running jobs (they will be redone)");
+            for (const Child& c : running)
+                kill(c.pid, SIGTERM);
+        }
+        while (!stopping && next < todo.size() && int(running.size()) < concurrency) {
+            const std::size_t left = todo.size() - next + running.size();
+            const int threads = o.threadsPerJob > 0
+                                    ? o.threadsPerJob
+                                    : std::max(1, cores / int(std::min<std::size_t>(
+                                                          left, std::size_t(concurrency))));
+            Job& job = plan.jobs[todo[next]];
+            Child c;
+            c.job = todo[next];
+            c.start = Clock::now();
+            try {
+                c.pid = startJob(exe, o.outDir, job, plan.matchArguments, threads);
+            } catch (const openvdb::Exception& e) {
+                job.state = "failed";
+                job.error = e.what();
+                ++next;
+                continue;
+            }
+            job.state = "running";
+            running.push_back(c);
+            ++next;
+            writePlan(o.outDir, plan);
+        }
+        // Reap finished children.
+        bool reaped = false;
+        for (std::size_t k = 0; k < running.size();) {
+            int status = 0;
+            struct rusage ru;
+            std::memset(&ru, 0, sizeof(ru));
+            const pid_t r = wait4(running[k].pid, &status, WNOHANG, &ru);
+            if (r == 0 || (r < 0 && errno == EINTR)) {
+                ++k;
+                continue;
+            }
+            Job& job = plan.jobs[running[k].job];
+            job.seconds = secondsSince(running[k].start);
+            job.peakMemoryMB = double(ru.ru_maxrss) / 1024.0;
+            const std::string dir = jobDir(o.outDir, job);
+            if (r > 0 && WIFEXITED(status)) {
+                job.exitCode = WEXITSTATUS(status);
+            } else {
+                job.exitCode = r > 0 && WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+            }
+            std::string why;
+            if (job.exitCode == EXIT_OK && outputsVerified(dir, &why)) {
+                job.state = "done";
+                job.error.clear();
+            } else if (job.exitCode == EXIT_INTERRUPTED || stopping) {
+                job.state = "interrupted";
+                job.error = "interrupted";
+            } else {
+                job.state = "failed";
+                job.error = job.exitCode == 127 ? "could not run " + exe
+                            : job.exitCode == EXIT_OK
+                                ? "outputs incomplete: " + why
+                                : lastErrorLine((fs::path(dir) / "log.txt").string());
+                if (job.error.empty()) job.error = "exit code " + std::to_string(job.exitCode);
+            }
+            ++finished;
+            finishedSeconds += job.seconds;
+            running.erase(running.begin() + std::ptrdiff_t(k));
+            reaped = true;
+            const int done = countState(plan, "done"), failed = countState(plan, "failed");
+            const std::size_t remaining = todo.size() - next + running.size();
+            const double left = double(remaining) * (finishedSeconds / finished) /
+                                double(std::max(1, concurrency));
+            say("batch: " + job.name + " " + job.state +
+                (job.state == "failed" ? " (" + job.error + ")" : "") + " in " +
+                duration(job.seconds) + "; " + std::to_string(done) + "/" +
+                std::to_string(plan.jobs.size()) + " done, " + std::to_string(failed) +
+                " failed, " + std::to_string(running.size()) + " running" +
+                (remaining > 0 && !stopping ? ", ~" + duration(left) + " left" : std::string()));
+        }
+        if (reaped) writePlan(o.outDir, plan);
+        if (!reaped) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    // Jobs never started because of an interruption stay pending.
+    writePlan(o.outDir, plan);
+    const int done = countState(plan, "done"), failed = countState(plan, "failed");
+    out << PROGRAM << ": batch " << (stopping ? "interrupted" : "finished") << ": " << done << "/"
+        << plan.jobs.size() << " done, " << failed << " failed, " << duration(secondsSince(start))
+        << "; " << (fs::path(o.outDir) / "plan.json").string() << "\n";
+    for (const Job& j : plan.jobs)
+        if (j.state == "failed") out << PROGRAM << ": failed: " << j.name << ": " << j.error << "\n";
+    if (stopping) throw Interrupted{};
+    return failed > 0 ? EXIT_JOBS_FAILED : EXIT_OK;
+}
+
+int
+statusCommand(const std::string& outDir, std::ostream& out)
+{
+    const Plan p = readPlan(outDir);
+    out << "plan " << p.kind << ", " << p.jobs.size() << " jobs: " << countState(p, "done")
+        << " done, " << countState(p, "failed") << " failed, " << countState(p, "pending")
+        << " pending, " << countState(p, "running") << " running, "
+        << countState(p, "interrupted") << " interrupted\n";
+    for (const Job& j : p.jobs) {
+        out << j.name << "  " << j.state;
+        if (j.seconds > 0) out << "  " << duration(j.seconds);
+        if (!j.error.empty()) out << "  " << j.error;
+        out << "\n";
+    }
+    return EXIT_OK;
+}
+
+/// `batch collect`: distances.csv (the final energy of each match; the mean of both directions
+/// where both ran) and summary.json (per job: energy and terms, residual, min det, time, memory,
+/// |psi o phi - Id| where both directions ran).
+int
+collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, bool quiet)
+{
+    const Plan p = readPlan(outDir);
+    std::map<std::string, Json> reports;
+    for (const Job& j : p.jobs) {
+        if (j.state != "done") continue;
+        std::ifstream f(fs::path(jobDir(outDir, j)) / "report.json");
+        try {
+            reports[j.name] = Json::parse(f);
+        } catch (const Json::exception&) {
+            OPENVDB_THROW(openvdb::ValueError, "job " << j.name << ": unreadable report.json");
+        }
+    }
+    auto energyOf = [&](const std::string& a, const std::string& b) -> std::optional<double> {
+        auto it = reports.find(stemOf(a) + "--" + stemOf(b));
+        if (it == reports.end()) return std::nullopt;
+        return it->second.at("result").at("energy").get<double>();
+    };
+    // distances.csv: rows the sources, columns the targets (all pairs: a symmetric matrix).
+    std::vector<std::string> rows, cols;
+    if (p.kind == "template") {
+        rows = {p.inputs[0]};
+        cols.assign(p.inputs.begin() + 1, p.inputs.end());
+    } else {
+        rows = cols = p.inputs;
+    }
+    std::ostringstream csv;
+    csv << "shape";
+    for (const std::string& c : cols)
+        csv << "," << stemOf(c);
+    csv << "\n";
+    for (const std::string& r : rows) {
+        csv << stemOf(r);
+        for (const std::string& c : cols) {
+            csv << ",";
+            if (r == c) {
+                csv << 0;
+                continue;
+            }
+            const auto ab = energyOf(r, c);
+            const auto ba = p.kind == "template" ? std::nullopt : energyOf(c, r);
+            if (ab && ba) {
+                csv << formatNumber(0.5 * (*ab + *ba));
+            } else if (ab || ba) {
+                csv << formatNumber(ab ? *ab : *ba);
+            }
+        }
+        csv << "\n";
+    }
+    writeFileAtomically((fs::path(outDir) / "distances.csv").string(),
+                        [&](std::ostream& os) { os << csv.str(); });
+
+    Json jobs = Json::array();
+    for (const Job& j : p.jobs) {
+        Json e{{"name", j.name},       {"source", j.source},
+               {"target", j.target},   {"state", j.state},
+               {"seconds", j.seconds}, {"peakMemoryMB", j.peakMemoryMB}};
+        if (!j.error.empty()) e["error"] = j.error;
+        auto it = reports.find(j.name);
+        if (it != reports.end()) {
+            const Json& res = it->second.at("result");
+            e["energy"] = res.at("energy");
+            if (res.contains("terms")) e["terms"] = res.at("terms");
+            e["residual"] = res.at("residual");
+            e["minJacobian"] = res.at("minJacobian");
+            // |psi o phi - Id| where the reverse job ran too (the consistency command).
+            const std::string reverse = stemOf(j.target) + "--" + stemOf(j.source);
+            if (reports.count(reverse)) {
+                const std::string phi = (fs::path(jobDir(outDir, j)) / "deformation.vdb").string();
+                Job rj;
+                rj.name = reverse;
+                const std::string psi = (fs::path(jobDir(outDir, rj)) / "deformation.vdb").string();
+                std::vector<std::string> args = {PROGRAM,    "consistency", phi,      psi,
+                                                 "--source", j.source,      "--target", j.target,
+                                                 "--json"};
+                std::vector<const char*> argv;
+                for (const std::string& a : args)
+                    argv.push_back(a.c_str());
+                std::ostringstream cout_, cerr_;
+                if (!quiet) err << PROGRAM << ": consistency of " << j.name << std::endl;
+                if (run(int(argv.size()), argv.data(), cout_, cerr_) == EXIT_OK) {
+                    const Json c = Json::parse(cout_.str());
+                    e["psiPhiMinusId"] = c.at("psi_phi");
+                } else {
+                    e["psiPhiMinusId"] = cerr_.str();
+                }
+            }
+        }
+        jobs.push_back(e);
+    }
+    const Json summary{{"plan", p.kind},
+                       {"jobs", int(p.jobs.size())},
+                       {"done", countState(p, "done")},
+                       {"failed", countState(p, "failed")},
+                       {"distance", "final energy E of the match (eq:Esym for the symmetric "
+                                    "energy); the mean of both directions where both ran"},
+                       {"results", jobs}};
+    const std::string text = dumpJson(summary);
+    writeFileAtomically((fs::path(outDir) / "summary.json").string(),
+                        [&](std::ostream& os) { os << text; });
+    out << PROGRAM << ": wrote " << (fs::path(outDir) / "distances.csv").string() << ", "
+        << (fs::path(outDir) / "summary.json").string() << " (" << reports.size() << " of "
+        << p.jobs.size() << " jobs done)\n";
+    return EXIT_OK;
+}
+
+} // namespace
+
+std::string
+batchOptionHelp()
+{
+    return optionHelp(batchOptionTable());
+}
+
+std::vector<OptionDescription>
+batchOptionDescriptions()
+{
+    return describeOptions(batchOptionTable());
+}
+
+int
+runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out, std::ostream& err)
+{
+    // Options of each match follow `--`.
+    int sep = argc;
+    for (int i = first; i < argc; ++i)
+        if (std::string(argv[i]) == "--") {
+            sep = i;
+            break;
+        }
+    std::vector<std::string> matchArgs(argv + std::min(sep + 1, argc), argv + argc);
+    for (const std::string& a : matchArgs) {
+        if (a == "-o" || a == "--output" || a.rfind("--output=", 0) == 0 || a == "--source" ||
+            a == "--target" || a == "--threads" || a == "--quiet") {
+            throw UsageError("batch: '" + a + "' after -- is set by batch for each job");
+        }
+    }
+    BatchCliOptions o;
+    std::vector<std::string> positional =
+        parseOptions(batchOptionTable(), sep, argv, first, o);
+    openvdb::initialize();
+    if (!positional.empty() && (positional[0] == "status" || positional[0] == "collect")) {
+        const std::string dir = positional.size() > 1 ? positional[1] : o.outDir;
+        if (dir.empty()) throw UsageError("batch " + positional[0] + " OUTDIR");
+        return positional[0] == "status" ? statusCommand(dir, out)
+                                         : collectCommand(dir, out, err, o.quiet);
+    }
+    if (o.outDir.empty()) throw UsageError("batch: missing -o OUTDIR");
+    if (o.jobs < 0 || o.threadsPerJob < 0)
+        throw UsageError("--jobs and --threads-per-job must be >= 0");
+    SignalScope signals;
+    Plan plan = makePlan(o, positional, matchArgs);
+    createOutputDirectory(o.outDir);
+    const OutputLock lock(o.outDir);
+    // The same command again resumes; another plan in the same directory is refused.
+    std::error_code ec;
+    if (fs::exists(fs::path(o.outDir) / "plan.json", ec)) {
+        Plan old = readPlan(o.outDir);
+        if (old.kind != plan.kind || old.inputs != plan.inputs ||
+            old.matchArguments != plan.matchArguments || old.jobs.size() != plan.jobs.size()) {
+            throw UsageError("'" + o.outDir +
+                             "' holds another batch (other plan, inputs or match options); "
+                             "use another -o, or remove it");
+        }
+        for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+            plan.jobs[i].state = old.jobs[i].state;
+            plan.jobs[i].seconds = old.jobs[i].seconds;
+            plan.jobs[i].peakMemoryMB = old.jobs[i].peakMemoryMB;
+            plan.jobs[i].exitCode = old.jobs[i].exitCode;
+        }
+    }
+    return runPlan(o, plan, out, err);
+}
+
+} // namespace cli
+} // namespace vdbmatch
