@@ -11,22 +11,21 @@
 
 #include <openvdb/io/File.h>
 
-#include <fcntl.h>
-#include <sys/resource.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
 #include <set>
 #include <sstream>
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <thread>
+#include <unistd.h>
 
 namespace vdbmatch {
 namespace cli {
@@ -88,7 +87,7 @@ batchOptionTable()
 struct Job
 {
     std::string name;
-    std::string source, target; ///< absolute paths
+    std::string source, target;    ///< absolute paths
     std::string state = "pending"; ///< pending, done, failed, interrupted
     int exitCode = -1;
     std::string error;
@@ -135,7 +134,8 @@ sequenceFiles(const std::string& pattern, const std::string& range)
     int a = 0, b = -1;
     {
         const auto dash = range.find('-', 1);
-        if (dash == std::string::npos) throw UsageError("--frames: expected A-B, got '" + range + "'");
+        if (dash == std::string::npos)
+            throw UsageError("--frames: expected A-B, got '" + range + "'");
         a = parseInt("--frames", range.substr(0, dash));
         b = parseInt("--frames", range.substr(dash + 1));
         if (b <= a) throw UsageError("--frames: " + range + " needs at least two frames (A < B)");
@@ -186,7 +186,8 @@ makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
 {
     const int kinds = int(o.allPairs) + int(!o.templateShape.empty()) + int(!o.sequence.empty());
     if (kinds != 1)
-        throw UsageError("batch: give exactly one of --all-pairs, --template T, --sequence PATTERN");
+        throw UsageError(
+            "batch: give exactly one of --all-pairs, --template T, --sequence PATTERN");
     if (o.bothDirections && !o.allPairs)
         throw UsageError("--both-directions goes with --all-pairs");
     Plan plan;
@@ -263,12 +264,8 @@ planJson(const Plan& p)
                             {"seconds", j.seconds},
                             {"peakMemoryMB", j.peakMemoryMB}});
     }
-    return Json{{"vdbmatch", VDBMATCH_VERSION},
-                {"plan", p.kind},
-                {"inputs", p.inputs},
-                {"matchArguments", p.matchArguments},
-                {"executor", "local"},
-                {"jobs", jobs}};
+    return Json{{"vdbmatch", VDBMATCH_VERSION},       {"plan", p.kind},      {"inputs", p.inputs},
+                {"matchArguments", p.matchArguments}, {"executor", "local"}, {"jobs", jobs}};
 }
 
 void
@@ -366,7 +363,8 @@ selfExecutable()
 {
     std::error_code ec;
     const fs::path p = fs::read_symlink("/proc/self/exe", ec);
-    if (ec) OPENVDB_THROW(openvdb::IoError, "cannot find the vdb_match executable: " << ec.message());
+    if (ec)
+        OPENVDB_THROW(openvdb::IoError, "cannot find the vdb_match executable: " << ec.message());
     return p.string();
 }
 
@@ -377,16 +375,17 @@ struct Child
     Clock::time_point start;
 };
 
-/// Starts `vdb_match match SOURCE TARGET -o DIR --quiet --threads T ARGS...`, output to DIR/log.txt.
+/// Starts `vdb_match match SOURCE TARGET -o DIR --quiet --threads T ARGS...`, output to
+/// DIR/log.txt.
 pid_t
 startJob(const std::string& exe, const std::string& outDir, const Job& job,
          const std::vector<std::string>& matchArgs, int threads)
 {
     const std::string dir = jobDir(outDir, job);
     createOutputDirectory(dir);
-    std::vector<std::string> args = {exe,        "match",  job.source, job.target,
-                                     "-o",       dir,      "--quiet",  "--threads",
-                                     std::to_string(threads)};
+    std::vector<std::string> args = {exe,        "match",     job.source,
+                                     job.target, "-o",        dir,
+                                     "--quiet",  "--threads", std::to_string(threads)};
     args.insert(args.end(), matchArgs.begin(), matchArgs.end());
     std::vector<char*> argv;
     for (std::string& a : args)
@@ -463,10 +462,11 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
         }
         while (!stopping && next < todo.size() && int(running.size()) < concurrency) {
             const std::size_t left = todo.size() - next + running.size();
-            const int threads = o.threadsPerJob > 0
-                                    ? o.threadsPerJob
-                                    : std::max(1, cores / int(std::min<std::size_t>(
-                                                          left, std::size_t(concurrency))));
+            const int threads =
+                o.threadsPerJob > 0
+                    ? o.threadsPerJob
+                    : std::max(1,
+                               cores / int(std::min<std::size_t>(left, std::size_t(concurrency))));
             Job& job = plan.jobs[todo[next]];
             Child c;
             c.job = todo[next];
@@ -525,8 +525,8 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
             reaped = true;
             const int done = countState(plan, "done"), failed = countState(plan, "failed");
             const std::size_t remaining = todo.size() - next + running.size();
-            const double left = double(remaining) * (finishedSeconds / finished) /
-                                double(std::max(1, concurrency));
+            const double left =
+                double(remaining) * (finishedSeconds / finished) / double(std::max(1, concurrency));
             say("batch: " + job.name + " " + job.state +
                 (job.state == "failed" ? " (" + job.error + ")" : "") + " in " +
                 duration(job.seconds) + "; " + std::to_string(done) + "/" +
@@ -544,7 +544,8 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
         << plan.jobs.size() << " done, " << failed << " failed, " << duration(secondsSince(start))
         << "; " << (fs::path(o.outDir) / "plan.json").string() << "\n";
     for (const Job& j : plan.jobs)
-        if (j.state == "failed") out << PROGRAM << ": failed: " << j.name << ": " << j.error << "\n";
+        if (j.state == "failed")
+            out << PROGRAM << ": failed: " << j.name << ": " << j.error << "\n";
     if (stopping) throw Interrupted{};
     return failed > 0 ? EXIT_JOBS_FAILED : EXIT_OK;
 }
@@ -555,8 +556,8 @@ statusCommand(const std::string& outDir, std::ostream& out)
     const Plan p = readPlan(outDir);
     out << "plan " << p.kind << ", " << p.jobs.size() << " jobs: " << countState(p, "done")
         << " done, " << countState(p, "failed") << " failed, " << countState(p, "pending")
-        << " pending, " << countState(p, "running") << " running, "
-        << countState(p, "interrupted") << " interrupted\n";
+        << " pending, " << countState(p, "running") << " running, " << countState(p, "interrupted")
+        << " interrupted\n";
     for (const Job& j : p.jobs) {
         out << j.name << "  " << j.state;
         if (j.seconds > 0) out << "  " << duration(j.seconds);
@@ -624,9 +625,8 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
 
     Json jobs = Json::array();
     for (const Job& j : p.jobs) {
-        Json e{{"name", j.name},       {"source", j.source},
-               {"target", j.target},   {"state", j.state},
-               {"seconds", j.seconds}, {"peakMemoryMB", j.peakMemoryMB}};
+        Json e{{"name", j.name},   {"source", j.source},   {"target", j.target},
+               {"state", j.state}, {"seconds", j.seconds}, {"peakMemoryMB", j.peakMemoryMB}};
         if (!j.error.empty()) e["error"] = j.error;
         auto it = reports.find(j.name);
         if (it != reports.end()) {
@@ -642,9 +642,9 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
                 Job rj;
                 rj.name = reverse;
                 const std::string psi = (fs::path(jobDir(outDir, rj)) / "deformation.vdb").string();
-                std::vector<std::string> args = {PROGRAM,    "consistency", phi,      psi,
-                                                 "--source", j.source,      "--target", j.target,
-                                                 "--json"};
+                std::vector<std::string> args = {PROGRAM,    "consistency", phi,
+                                                 psi,        "--source",    j.source,
+                                                 "--target", j.target,      "--json"};
                 std::vector<const char*> argv;
                 for (const std::string& a : args)
                     argv.push_back(a.c_str());
@@ -708,8 +708,7 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
         }
     }
     BatchCliOptions o;
-    std::vector<std::string> positional =
-        parseOptions(batchOptionTable(), sep, argv, first, o);
+    std::vector<std::string> positional = parseOptions(batchOptionTable(), sep, argv, first, o);
     openvdb::initialize();
     if (!positional.empty() && (positional[0] == "status" || positional[0] == "collect")) {
         const std::string dir = positional.size() > 1 ? positional[1] : o.outDir;

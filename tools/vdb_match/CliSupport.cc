@@ -9,11 +9,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fcntl.h>
 #include <filesystem>
 #include <limits>
 #include <sstream>
-
-#include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
 

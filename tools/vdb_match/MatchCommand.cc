@@ -366,7 +366,6 @@ parseMatchOptions(int argc, const char* const* argv, int first)
 ////////////////////////////////////////////////////////////////////////////////
 // Progress
 
-
 std::string
 termsText(const EnergyTerms& t)
 {
@@ -545,7 +544,6 @@ inputJson(const Shape& in)
     if (in.isoValue) j["isoValue"] = *in.isoValue;
     return j;
 }
-
 
 /// What was written besides deformation.vdb, for report.json.
 struct ExtraOutputs
