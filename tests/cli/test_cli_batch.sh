@@ -92,6 +92,65 @@ check "sequence: a missing frame" 2 '' 'frame 4 of the sequence is missing' -- \
     batch --sequence "$SCRATCH/seq/shape.####.polyline" --frames 1-4 -o "$SCRATCH/seq2" "${LEVELS[@]}"
 expect "sequence: nothing written for a refused plan" test ! -e "$SCRATCH/seq2/plan.json"
 
+# A sequence's collect: the first frame's curve carried to every frame, and the composed maps.
+mkdir -p "$SCRATCH/morph"
+"$PYTHON" - "$S/a.polyline" "$S/b.polyline" "$SCRATCH/morph" <<'PY'
+import sys
+def read(p):
+    return [[float(v) for v in l.split()] for l in open(p) if l.strip() and not l.startswith("#")]
+a, b = read(sys.argv[1]), read(sys.argv[2])
+for k in range(4):
+    t = k / 3
+    with open(f"{sys.argv[3]}/fig.{k + 1:04d}.polyline", "w") as f:
+        f.writelines(f"{(1 - t) * p[0] + t * q[0]:.6f} {(1 - t) * p[1] + t * q[1]:.6f}\n" for p, q in zip(a, b))
+PY
+check "sequence of a morph" 0 '3/3 done' '' -- \
+    batch --sequence "$SCRATCH/morph/fig.####.polyline" --frames 1-4 -o "$SCRATCH/morphout" --quiet -- --levels 4..6
+check "sequence collect" 0 '3 of 3 jobs done' '' -- batch collect "$SCRATCH/morphout" --quiet
+# The same chain by hand: frame 1's curve through the three jobs' deformations with apply.
+cp "$SCRATCH/morph/fig.0001.polyline" "$SCRATCH/chain0.polyline"
+for k in 1 2 3; do
+    "$VDB_MATCH" apply "$SCRATCH/morphout/jobs/fig.000$k--fig.000$((k + 1))/deformation.vdb" \
+        "$SCRATCH/chain$((k - 1)).polyline" -o "$SCRATCH/chain$k.polyline" >/dev/null 2>&1
+done
+count=$((count + 1))
+result=$("$PYTHON" - "$SCRATCH" <<'PY'
+import sys
+d = sys.argv[1]
+def obj(p):
+    return [[float(x) for x in l.split()[1:3]] for l in open(p) if l.startswith("v ")]
+def poly(p):
+    return [[float(v) for v in l.split()] for l in open(p) if l.strip() and not l.startswith("#")]
+seq = obj(d + "/morphout/sequence/deformed.0004.obj")
+chain = poly(d + "/chain3.polyline")
+first = obj(d + "/morphout/sequence/deformed.0001.obj")
+src = poly(d + "/morph/fig.0001.polyline")
+err = max(abs(a - b) for p, q in zip(seq, chain) for a, b in zip(p, q))
+err1 = max(abs(a - b) for p, q in zip(first, src) for a, b in zip(p, q))
+moved = max(abs(a - b) for p, q in zip(seq, src) for a, b in zip(p, q))
+ok = len(seq) == len(chain) == len(src) and err < 1e-5 and err1 < 1e-6 and moved > 0.05
+print("ok" if ok else f"sequence mesh: {len(seq)} {len(chain)} err {err} first {err1} moved {moved}")
+PY
+)
+[ "$result" = ok ] && echo "ok   sequence: deformed.0004.obj is frame 1 carried by the three maps" || fail "$result"
+expect "sequence: composed maps 2..4" test -s "$SCRATCH/morphout/sequence/composed.0004.vdb" -a -s "$SCRATCH/morphout/sequence/composed.0002.vdb"
+if "$PYTHON" -c "import pyopenvdb, numpy" 2>/dev/null; then
+    count=$((count + 1))
+    result=$("$PYTHON" - "$SCRATCH/morphout" <<'PY'
+import sys, pyopenvdb as vdb
+d = sys.argv[1]
+def values(p):
+    g = vdb.readAll(p)[0][0]
+    return {x["min"]: x["value"] for x in g.citerOnValues()}
+first = values(d + "/jobs/fig.0001--fig.0002/deformation.vdb")
+composed = values(d + "/sequence/composed.0002.vdb")
+err = max(max(abs(a - b) for a, b in zip(first[c], composed[c])) for c in first)
+print("ok" if first.keys() == composed.keys() and err < 1e-6 else f"composed.0002 differs from phi_0 by {err}")
+PY
+)
+    [ "$result" = ok ] && echo "ok   sequence: composed.0002.vdb is the first map" || fail "$result"
+fi
+
 # Usage errors.
 mkdir -p "$SCRATCH/dup"
 cp "$S/a.polyline" "$SCRATCH/dup/a.polyline"

@@ -8,6 +8,9 @@
 #include "CliSupport.h"
 
 #include <vdbmatch/io/AtomicFile.h>
+#include <vdbmatch/io/DeformationField.h>
+#include <vdbmatch/io/LevelSetIO.h>
+#include <vdbmatch/io/MeshIO.h>
 
 #include <openvdb/io/File.h>
 
@@ -97,7 +100,8 @@ struct Job
 
 struct Plan
 {
-    std::string kind; ///< all-pairs, template, sequence
+    std::string kind;   ///< all-pairs, template, sequence
+    int firstFrame = 0; ///< sequence: the frame number of inputs[0]
     std::vector<std::string> inputs;
     std::vector<std::string> matchArguments;
     std::vector<Job> jobs;
@@ -198,6 +202,7 @@ makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
         if (o.frames.empty()) throw UsageError("--sequence needs --frames A-B");
         plan.kind = "sequence";
         shapes = sequenceFiles(o.sequence, o.frames);
+        plan.firstFrame = std::stoi(o.frames.substr(0, o.frames.find('-', 1)));
     } else {
         if (!o.frames.empty()) throw UsageError("--frames goes with --sequence");
         plan.kind = o.allPairs ? "all-pairs" : "template";
@@ -264,8 +269,13 @@ planJson(const Plan& p)
                             {"seconds", j.seconds},
                             {"peakMemoryMB", j.peakMemoryMB}});
     }
-    return Json{{"vdbmatch", VDBMATCH_VERSION},       {"plan", p.kind},      {"inputs", p.inputs},
-                {"matchArguments", p.matchArguments}, {"executor", "local"}, {"jobs", jobs}};
+    Json plan{{"vdbmatch", VDBMATCH_VERSION}, {"plan", p.kind}};
+    if (p.kind == "sequence") plan["firstFrame"] = p.firstFrame;
+    plan["inputs"] = p.inputs;
+    plan["matchArguments"] = p.matchArguments;
+    plan["executor"] = "local";
+    plan["jobs"] = jobs;
+    return plan;
 }
 
 void
@@ -287,6 +297,7 @@ readPlan(const std::string& outDir)
         j = Json::parse(f);
         Plan p;
         p.kind = j.at("plan").get<std::string>();
+        p.firstFrame = j.value("firstFrame", 0);
         p.inputs = j.at("inputs").get<std::vector<std::string>>();
         p.matchArguments = j.at("matchArguments").get<std::vector<std::string>>();
         for (const Json& e : j.at("jobs")) {
@@ -567,6 +578,94 @@ statusCommand(const std::string& outDir, std::ostream& out)
     return EXIT_OK;
 }
 
+std::string
+frameName(const std::string& stem, int frame, const char* extension)
+{
+    char digits[32];
+    std::snprintf(digits, sizeof(digits), "%04d", frame);
+    return stem + "." + digits + extension;
+}
+
+/// For a sequence whose jobs are all done: the first frame's surface carried to every frame
+/// (OUTDIR/sequence/deformed.####.obj, the first frame's elements with the vertices moved by
+/// phi_{k-1} o ... o phi_0) and the composed maps from the first frame to every later one
+/// (OUTDIR/sequence/composed.####.vdb: at every node x of the first job's grid, the
+/// displacement phi_{k-1}(...phi_0(x)) - x, each map evaluated exactly).
+Json
+collectSequence(const std::string& outDir, const Plan& p, std::ostream& err, bool quiet)
+{
+    for (const Job& j : p.jobs)
+        if (j.state != "done")
+            OPENVDB_THROW(openvdb::ValueError, "batch collect: job " << j.name << " is " << j.state
+                                                                     << "; the sequence outputs "
+                                                                        "need every frame");
+    const fs::path dir = fs::path(outDir) / "sequence";
+    createOutputDirectory(dir.string());
+    const Shape first = readInputShape(p.inputs[0], "");
+    std::vector<openvdb::Vec3d> points;
+    if (first.dim == 3) {
+        for (const Vec<3>& v : first.surface.points)
+            points.emplace_back(v[0], v[1], v[2]);
+    } else {
+        for (const Vec<2>& v : first.curve.points)
+            points.emplace_back(v[0], v[1], 0.0);
+    }
+    auto writeMesh = [&](int frame) {
+        const std::string path = (dir / frameName("deformed", frame, ".obj")).string();
+        writeFileAtomically(path, [&](std::ostream& os) {
+            if (first.dim == 3) {
+                Surface<3> s = first.surface;
+                for (std::size_t i = 0; i < points.size(); ++i)
+                    s.points[i] = Vec<3>(points[i][0], points[i][1], points[i][2]);
+                writeObj(os, s);
+            } else {
+                Surface<2> s = first.curve;
+                for (std::size_t i = 0; i < points.size(); ++i)
+                    s.points[i] = Vec<2>(points[i][0], points[i][1]);
+                writeObj(os, s);
+            }
+        });
+    };
+    writeMesh(p.firstFrame);
+    // The nodes of the first job's grid and their images so far.
+    const DeformationField phi0 =
+        DeformationField::read((fs::path(jobDir(outDir, p.jobs[0])) / "deformation.vdb").string());
+    openvdb::Vec3SGrid::Ptr composed = phi0.grid().deepCopy();
+    std::vector<openvdb::Coord> nodes;
+    std::vector<openvdb::Vec3d> image;
+    for (auto it = composed->cbeginValueOn(); it; ++it) {
+        nodes.push_back(it.getCoord());
+        image.push_back(composed->indexToWorld(it.getCoord()));
+    }
+    for (std::size_t k = 0; k < p.jobs.size(); ++k) {
+        checkInterrupted();
+        const int frame = p.firstFrame + int(k) + 1;
+        if (!quiet) err << PROGRAM << ": sequence: frame " << frame << std::endl;
+        const DeformationField phi =
+            k == 0 ? phi0
+                   : DeformationField::read(
+                         (fs::path(jobDir(outDir, p.jobs[k])) / "deformation.vdb").string());
+        phi.mapPoints(points, false);
+        phi.mapPoints(image, false);
+        writeMesh(frame);
+        auto acc = composed->getAccessor();
+        for (std::size_t i = 0; i < nodes.size(); ++i) {
+            const openvdb::Vec3d d = image[i] - composed->indexToWorld(nodes[i]);
+            acc.setValueOnly(nodes[i], openvdb::Vec3s(float(d[0]), float(d[1]), float(d[2])));
+        }
+        composed->removeMeta("vdbmatch_composed_frames");
+        composed->insertMeta(
+            "vdbmatch_composed_frames",
+            openvdb::StringMetadata(std::to_string(p.firstFrame) + ".." + std::to_string(frame)));
+        writeGridsAtomically((dir / frameName("composed", frame, ".vdb")).string(), {composed},
+                             openvdb::MetaMap());
+    }
+    const int last = p.firstFrame + int(p.jobs.size());
+    return Json{{"frames", {p.firstFrame, last}},
+                {"meshes", "sequence/deformed.####.obj"},
+                {"composedMaps", "sequence/composed.####.vdb"}};
+}
+
 /// `batch collect`: distances.csv (the final energy of each match; the mean of both directions
 /// where both ran) and summary.json (per job: energy and terms, residual, min det, time, memory,
 /// |psi o phi - Id| where both directions ran).
@@ -660,13 +759,17 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
         }
         jobs.push_back(e);
     }
-    const Json summary{{"plan", p.kind},
-                       {"jobs", int(p.jobs.size())},
-                       {"done", countState(p, "done")},
-                       {"failed", countState(p, "failed")},
-                       {"distance", "final energy E of the match (eq:Esym for the symmetric "
-                                    "energy); the mean of both directions where both ran"},
-                       {"results", jobs}};
+    Json sequence;
+    if (p.kind == "sequence" && countState(p, "done") == int(p.jobs.size()))
+        sequence = collectSequence(outDir, p, err, quiet);
+    Json summary{{"plan", p.kind},
+                 {"jobs", int(p.jobs.size())},
+                 {"done", countState(p, "done")},
+                 {"failed", countState(p, "failed")},
+                 {"distance", "final energy E of the match (eq:Esym for the symmetric "
+                              "energy); the mean of both directions where both ran"},
+                 {"results", jobs}};
+    if (!sequence.is_null()) summary["sequence"] = sequence;
     const std::string text = dumpJson(summary);
     writeFileAtomically((fs::path(outDir) / "summary.json").string(),
                         [&](std::ostream& os) { os << text; });
