@@ -63,11 +63,13 @@ s = json.load(open(d + "/summary.json"))
 e = {r["name"]: r["energy"] for r in s["results"]}
 ok = names == ["a", "b", "c"] and all(m[x][x] == 0 for x in names)
 ok = ok and all(m[x][y] == m[y][x] > 0 for x in names for y in names if x != y)
-ok = ok and abs(m["a"]["b"] - e["a--b"]) <= 1e-6 * e["a--b"] and s["done"] == 3
+ok = ok and abs(m["a"]["b"] - e["a--b"] ** 0.5) <= 1e-6 * m["a"]["b"] and s["done"] == 3
+ok = ok and s["pictures"]["clusterOrder"] and sorted(s["pictures"]["clusterOrder"]) == names
 print("ok" if ok else f"bad matrix or summary: {m} {e}")
 PY
 )
-[ "$result" = ok ] && echo "ok   collect: distances.csv symmetric, energies of summary.json" || fail "collect: $result"
+[ "$result" = ok ] && echo "ok   collect: distances.csv symmetric, sqrt of the energies of summary.json" || fail "collect: $result"
+expect "collect: heat map and MDS pictures" test -s "$SCRATCH/pairs/distances.png" -a -s "$SCRATCH/pairs/mds.png"
 
 # A job that fails (a shape the reader refuses) does not stop the others: exit code 6.
 printf '# one point\n1 2\n' >"$S/bad.polyline"

@@ -7,20 +7,25 @@
 ///        it and `batch collect` writes distances.csv and summary.json (docs/batch.md).
 #include "CliSupport.h"
 
+#include <vdbmatch/eval/DistanceMatrix.h>
 #include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
+#include <vdbmatch/io/ImageIO.h>
 #include <vdbmatch/io/LevelSetIO.h>
 #include <vdbmatch/io/MeshIO.h>
+#include <vdbmatch/render/MatrixPlots.h>
 
 #include <openvdb/io/File.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <csignal>
 #include <cstring>
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <set>
@@ -666,9 +671,9 @@ collectSequence(const std::string& outDir, const Plan& p, std::ostream& err, boo
                 {"composedMaps", "sequence/composed.####.vdb"}};
 }
 
-/// `batch collect`: distances.csv (the final energy of each match; the mean of both directions
-/// where both ran) and summary.json (per job: energy and terms, residual, min det, time, memory,
-/// |psi o phi - Id| where both directions ran).
+/// `batch collect`: distances.csv (sqrt of the final energy of each match; the mean of both
+/// directions where both ran), distances.png and mds.png for all pairs and summary.json (per job:
+/// energy and terms, residual, min det, time, memory, |psi o phi - Id| where both directions ran).
 int
 collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, bool quiet)
 {
@@ -686,7 +691,9 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
     auto energyOf = [&](const std::string& a, const std::string& b) -> std::optional<double> {
         auto it = reports.find(stemOf(a) + "--" + stemOf(b));
         if (it == reports.end()) return std::nullopt;
-        return it->second.at("result").at("energy").get<double>();
+        // E is quadratic in the deformation (a squared length, like a path energy): its square
+        // root is the distance.
+        return std::sqrt(std::max(0.0, it->second.at("result").at("energy").get<double>()));
     };
     // distances.csv: rows the sources, columns the targets (all pairs: a symmetric matrix).
     std::vector<std::string> rows, cols;
@@ -759,6 +766,42 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
         }
         jobs.push_back(e);
     }
+    // All pairs: the matrix as a heat map in the order of a hierarchical clustering, and the
+    // shapes placed in the plane by MDS.
+    Json pictures = Json::object();
+    if (p.kind == "all-pairs") {
+        eval::DistanceMatrix m;
+        m.n = int(p.inputs.size());
+        m.d.assign(std::size_t(m.n) * std::size_t(m.n), std::numeric_limits<double>::quiet_NaN());
+        std::vector<std::string> names;
+        for (int i = 0; i < m.n; ++i) {
+            names.push_back(stemOf(p.inputs[std::size_t(i)]));
+            for (int j = 0; j < m.n; ++j) {
+                if (i == j) {
+                    m.d[std::size_t(i * m.n + j)] = 0;
+                    continue;
+                }
+                const auto ab = energyOf(p.inputs[std::size_t(i)], p.inputs[std::size_t(j)]);
+                const auto ba = energyOf(p.inputs[std::size_t(j)], p.inputs[std::size_t(i)]);
+                if (ab || ba)
+                    m.d[std::size_t(i * m.n + j)] = ab && ba ? 0.5 * (*ab + *ba) : ab ? *ab : *ba;
+            }
+        }
+        const std::vector<int> order = eval::clusterOrder(m);
+        const Image8 heat = render::distanceHeatMap(m, names, order, "distance sqrt(E), clustered");
+        writePng((fs::path(outDir) / "distances.png").string(), heat.width, heat.height, heat.rgb);
+        Json ordered = Json::array();
+        for (int k : order)
+            ordered.push_back(names[std::size_t(k)]);
+        pictures["distances.png"] = "heat map of distances.csv, rows and columns in clusterOrder";
+        pictures["clusterOrder"] = ordered;
+        if (m.n >= 3) {
+            const Image8 mds =
+                render::labelledScatter(eval::classicalMds(m), names, "classical MDS of sqrt(E)");
+            writePng((fs::path(outDir) / "mds.png").string(), mds.width, mds.height, mds.rgb);
+            pictures["mds.png"] = "the shapes placed in the plane by classical MDS";
+        }
+    }
     Json sequence;
     if (p.kind == "sequence" && countState(p, "done") == int(p.jobs.size()))
         sequence = collectSequence(outDir, p, err, quiet);
@@ -770,6 +813,7 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
                               "energy); the mean of both directions where both ran"},
                  {"results", jobs}};
     if (!sequence.is_null()) summary["sequence"] = sequence;
+    if (!pictures.empty()) summary["pictures"] = pictures;
     const std::string text = dumpJson(summary);
     writeFileAtomically((fs::path(outDir) / "summary.json").string(),
                         [&](std::ostream& os) { os << text; });
