@@ -53,6 +53,10 @@ struct BatchCliOptions
     int jobs = 0;          ///< concurrent jobs, 0: automatic
     int threadsPerJob = 0; ///< 0: automatic
     bool quiet = false;
+    std::string executor = "local"; ///< local or slurm
+    int arrayThrottle = 0;          ///< slurm: tasks at a time (0: no limit)
+    int memoryPerTaskMB = 0;        ///< slurm: 0: from the finest level
+    bool wait = false;              ///< slurm: wait for the array to end
 };
 
 std::vector<Option<BatchCliOptions>>
@@ -85,6 +89,23 @@ batchOptionTable()
         {"--threads-per-job", "N", "Execution",
          "threads of each job (default: the cores divided among the jobs running, at least 1)",
          [](O& o, const std::string& v) { o.threadsPerJob = parseInt("--threads-per-job", v); }},
+        {"--executor", "NAME", "Execution",
+         "local (default: child processes on this machine) or slurm (a job array submitted "
+         "with sbatch; follow it with batch status, or --wait)",
+         [](O& o, const std::string& v) {
+             if (v != "local" && v != "slurm")
+                 throw UsageError("--executor: expected local or slurm, got '" + v + "'");
+             o.executor = v;
+         }},
+        {"--array-throttle", "N", "Execution", "slurm: at most N array tasks at a time (default: no limit)",
+         [](O& o, const std::string& v) { o.arrayThrottle = parseInt("--array-throttle", v); }},
+        {"--memory-per-task", "MB", "Execution",
+         "slurm: memory per task (default: from the finest level: 1 GB up to level 7, 2 GB at "
+         "8, 8 GB at 9)",
+         [](O& o, const std::string& v) { o.memoryPerTaskMB = parseInt("--memory-per-task", v); }},
+        {"--wait", nullptr, "Execution",
+         "slurm: wait until every task has ended, then report as the local executor does",
+         [](O& o, const std::string&) { o.wait = true; }},
         {"--quiet", nullptr, "Execution", "no progress on stderr (errors are still printed)",
          [](O& o, const std::string&) { o.quiet = true; }},
     };
@@ -107,6 +128,9 @@ struct Plan
 {
     std::string kind;   ///< all-pairs, template, sequence
     int firstFrame = 0; ///< sequence: the frame number of inputs[0]
+    std::string executor = "local";
+    std::string slurmJobId;      ///< slurm: the array job of the last submission
+    std::vector<int> slurmTasks; ///< slurm: the jobs submitted (array index = job index)
     std::vector<std::string> inputs;
     std::vector<std::string> matchArguments;
     std::vector<Job> jobs;
@@ -278,7 +302,9 @@ planJson(const Plan& p)
     if (p.kind == "sequence") plan["firstFrame"] = p.firstFrame;
     plan["inputs"] = p.inputs;
     plan["matchArguments"] = p.matchArguments;
-    plan["executor"] = "local";
+    plan["executor"] = p.executor;
+    if (p.executor == "slurm")
+        plan["slurm"] = Json{{"jobId", p.slurmJobId}, {"jobs", p.slurmTasks}};
     plan["jobs"] = jobs;
     return plan;
 }
@@ -303,6 +329,11 @@ readPlan(const std::string& outDir)
         Plan p;
         p.kind = j.at("plan").get<std::string>();
         p.firstFrame = j.value("firstFrame", 0);
+        p.executor = j.value("executor", std::string("local"));
+        if (j.contains("slurm")) {
+            p.slurmJobId = j["slurm"].value("jobId", std::string());
+            p.slurmTasks = j["slurm"].value("jobs", std::vector<int>());
+        }
         p.inputs = j.at("inputs").get<std::vector<std::string>>();
         p.matchArguments = j.at("matchArguments").get<std::vector<std::string>>();
         for (const Json& e : j.at("jobs")) {
@@ -424,6 +455,92 @@ startJob(const std::string& exe, const std::string& outDir, const Job& job,
         _exit(127);
     }
     return pid;
+}
+
+std::string
+shellQuote(const std::string& s)
+{
+    std::string q = "'";
+    for (char c : s) {
+        if (c == '\'') {
+            q += "'\\''";
+        } else {
+            q += c;
+        }
+    }
+    return q + "'";
+}
+
+/// The shell line of a job, as in jobs.txt: its folder made, then the match with its output
+/// in DIR/log.txt.
+std::string
+jobCommandLine(const std::string& exe, const std::string& outDir, const Job& job,
+               const std::vector<std::string>& matchArgs, int threads)
+{
+    const std::string dir = absolutePath(jobDir(outDir, job));
+    std::string line = "mkdir -p " + shellQuote(dir) + " && exec " + shellQuote(exe) + " match " +
+                       shellQuote(job.source) + " " + shellQuote(job.target) + " -o " +
+                       shellQuote(dir) + " --quiet --threads " + std::to_string(threads);
+    for (const std::string& a : matchArgs)
+        line += " " + shellQuote(a);
+    return line + " > " + shellQuote(dir + "/log.txt") + " 2>&1";
+}
+
+/// OUTDIR/jobs.txt: line k + 1 is the shell command of job k (docs/batch.md).
+void
+writeJobList(const std::string& outDir, const Plan& plan, const std::string& exe, int threads)
+{
+    std::string text;
+    for (const Job& j : plan.jobs)
+        text += jobCommandLine(exe, outDir, j, plan.matchArguments, threads) + "\n";
+    writeFileAtomically((fs::path(outDir) / "jobs.txt").string(),
+                        [&](std::ostream& os) { os << text; });
+}
+
+/// Runs a shell command; returns its exit status and its output (stdout and stderr).
+std::pair<int, std::string>
+capture(const std::string& command)
+{
+    std::string output;
+    FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+    if (!pipe) return {-1, std::strerror(errno)};
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof(buf), pipe)) > 0)
+        output.append(buf, n);
+    const int status = pclose(pipe);
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, output};
+}
+
+std::string
+firstLine(const std::string& text)
+{
+    std::string line = text.substr(0, text.find('\n'));
+    return line.empty() ? text : line;
+}
+
+/// The finest level the match options ask for (--levels A..B, --max-level L; default 8).
+int
+finestLevel(const std::vector<std::string>& args)
+{
+    int level = 8;
+    for (std::size_t i = 0; i + 1 < args.size(); ++i) {
+        if (args[i] == "--levels") {
+            const auto dots = args[i + 1].find("..");
+            if (dots != std::string::npos) level = std::atoi(args[i + 1].c_str() + dots + 2);
+        } else if (args[i] == "--max-level") {
+            level = std::atoi(args[i + 1].c_str());
+        }
+    }
+    return level;
+}
+
+/// Memory per Slurm task: the peak of one 3D match at its finest level with margin (0.35 GB at
+/// 4..7 and 0.75 GB at 4..8 measured, docs/performance.md).
+int
+defaultMemoryMB(int level)
+{
+    return level <= 7 ? 1024 : level == 8 ? 2048 : 8192;
 }
 
 int
@@ -566,10 +683,60 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
     return failed > 0 ? EXIT_JOBS_FAILED : EXIT_OK;
 }
 
+/// The array tasks of the plan's Slurm job still queued or running: job index -> state.
+std::map<int, std::string>
+activeSlurmTasks(const Plan& p)
+{
+    std::map<int, std::string> active;
+    if (p.slurmJobId.empty()) return active;
+    const auto [code, text] =
+        capture("squeue -h -r -j " + shellQuote(p.slurmJobId) + " -o '%K %T'");
+    if (code != 0) return active; // the job has left the queue (or squeue is not there)
+    std::istringstream lines(text);
+    std::string task, state;
+    while (lines >> task >> state) {
+        if (std::isdigit(static_cast<unsigned char>(task[0])))
+            active[std::atoi(task.c_str())] = state;
+    }
+    return active;
+}
+
+/// Updates the states of the submitted jobs from squeue and their folders.
+void
+refreshSlurmStates(const std::string& outDir, Plan& p)
+{
+    const std::map<int, std::string> active = activeSlurmTasks(p);
+    for (int k : p.slurmTasks) {
+        if (k < 0 || k >= int(p.jobs.size())) continue;
+        Job& j = p.jobs[std::size_t(k)];
+        const auto it = active.find(k);
+        if (it != active.end()) {
+            j.state = it->second == "RUNNING" ? "running" : "pending";
+            continue;
+        }
+        if (j.state == "done" || j.state == "failed") continue;
+        const std::string dir = jobDir(outDir, j);
+        std::string why;
+        if (outputsVerified(dir, &why)) {
+            j.state = "done";
+            j.error.clear();
+        } else {
+            j.state = "failed";
+            j.error = lastErrorLine((fs::path(dir) / "log.txt").string());
+            if (j.error.empty()) j.error = "no result (" + why + "); see the task's log in slurm/";
+        }
+    }
+}
+
 int
 statusCommand(const std::string& outDir, std::ostream& out)
 {
-    const Plan p = readPlan(outDir);
+    Plan p = readPlan(outDir);
+    if (p.executor == "slurm") {
+        refreshSlurmStates(outDir, p);
+        writePlan(outDir, p);
+        out << "slurm job " << p.slurmJobId << "\n";
+    }
     out << "plan " << p.kind << ", " << p.jobs.size() << " jobs: " << countState(p, "done")
         << " done, " << countState(p, "failed") << " failed, " << countState(p, "pending")
         << " pending, " << countState(p, "running") << " running, " << countState(p, "interrupted")
@@ -677,7 +844,11 @@ collectSequence(const std::string& outDir, const Plan& p, std::ostream& err, boo
 int
 collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, bool quiet)
 {
-    const Plan p = readPlan(outDir);
+    Plan p = readPlan(outDir);
+    if (p.executor == "slurm") {
+        refreshSlurmStates(outDir, p);
+        writePlan(outDir, p);
+    }
     std::map<std::string, Json> reports;
     for (const Job& j : p.jobs) {
         if (j.state != "done") continue;
@@ -823,6 +994,116 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
     return EXIT_OK;
 }
 
+/// `--executor slurm`: the jobs not yet done as one job array (array index = job index), the
+/// script OUTDIR/slurm/batch.sbatch running line k + 1 of OUTDIR/jobs.txt for task k.
+int
+submitSlurm(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& err)
+{
+    auto say = [&](const std::string& text) {
+        if (!o.quiet) err << PROGRAM << ": " << text << std::endl;
+    };
+    const std::map<int, std::string> active = activeSlurmTasks(plan);
+    if (!active.empty()) {
+        throw UsageError("slurm job " + plan.slurmJobId + " of this batch still has " +
+                         std::to_string(active.size()) +
+                         " task(s) queued or running; wait for it (batch status) or scancel it");
+    }
+    refreshSlurmStates(o.outDir, plan);
+    std::vector<int> todo;
+    for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
+        Job& j = plan.jobs[i];
+        if (j.state == "done" && outputsVerified(jobDir(o.outDir, j))) continue;
+        j.state = "pending";
+        j.error.clear();
+        todo.push_back(int(i));
+    }
+    if (todo.empty()) {
+        writePlan(o.outDir, plan);
+        out << PROGRAM << ": batch: all " << plan.jobs.size() << " jobs done; nothing to submit\n";
+        return EXIT_OK;
+    }
+    const std::string exe = selfExecutable();
+    const int threads = o.threadsPerJob > 0 ? o.threadsPerJob : 1;
+    writeJobList(o.outDir, plan, exe, threads);
+    const fs::path slurmDir = fs::path(absolutePath(o.outDir)) / "slurm";
+    createOutputDirectory(slurmDir.string());
+    std::string array;
+    for (std::size_t k = 0; k < todo.size(); ++k)
+        array += (k ? "," : "") + std::to_string(todo[k]);
+    if (o.arrayThrottle > 0) array += "%" + std::to_string(o.arrayThrottle);
+    const int memory = o.memoryPerTaskMB > 0 ? o.memoryPerTaskMB
+                                             : defaultMemoryMB(finestLevel(plan.matchArguments));
+    const std::string jobs = (fs::path(absolutePath(o.outDir)) / "jobs.txt").string();
+    std::ostringstream script;
+    script << "#!/bin/bash\n"
+           << "# vdb_match batch: " << plan.jobs.size() << " jobs of plan " << plan.kind
+           << "; array task k runs line k+1 of jobs.txt (docs/batch.md).\n"
+           << "#SBATCH --job-name=vdbmatch\n"
+           << "#SBATCH --array=" << array << "\n"
+           << "#SBATCH --cpus-per-task=" << threads << "\n"
+           << "#SBATCH --mem=" << memory << "M\n"
+           << "#SBATCH --output=" << (slurmDir / "task_%A_%a.log").string() << "\n"
+           << "set -eu\n"
+           << "line=$(sed -n \"$((SLURM_ARRAY_TASK_ID + 1))p\" " << shellQuote(jobs) << ")\n"
+           << "exec bash -c \"$line\"\n";
+    const std::string scriptPath = (slurmDir / "batch.sbatch").string();
+    writeFileAtomically(scriptPath, [&](std::ostream& os) { os << script.str(); });
+    const auto [code, text] = capture("sbatch --parsable " + shellQuote(scriptPath));
+    if (code != 0) {
+        writePlan(o.outDir, plan);
+        OPENVDB_THROW(openvdb::IoError,
+                      "sbatch " << (code == 127 ? "is not installed (no Slurm here?)"
+                                                : "refused the job array: " + firstLine(text))
+                                << "; the script is " << scriptPath);
+    }
+    plan.executor = "slurm";
+    plan.slurmJobId = firstLine(text).substr(0, firstLine(text).find(';'));
+    plan.slurmTasks = todo;
+    for (int k : todo)
+        plan.jobs[std::size_t(k)].state = "pending";
+    writePlan(o.outDir, plan);
+    say("batch: submitted slurm job " + plan.slurmJobId + " (" + std::to_string(todo.size()) +
+        " array tasks, " + std::to_string(threads) + " CPU and " + std::to_string(memory) +
+        " MB each)");
+    if (!o.wait) {
+        out << PROGRAM << ": batch submitted as slurm job " << plan.slurmJobId
+            << "; follow it with " << PROGRAM << " batch status " << o.outDir << "\n";
+        return EXIT_OK;
+    }
+    // --wait: follow the array until no task is queued or running.
+    const Clock::time_point start = Clock::now();
+    std::string last;
+    while (true) {
+        if (wasSignalled()) {
+            capture("scancel " + shellQuote(plan.slurmJobId));
+            refreshSlurmStates(o.outDir, plan);
+            writePlan(o.outDir, plan);
+            throw Interrupted{};
+        }
+        refreshSlurmStates(o.outDir, plan);
+        const int running = countState(plan, "running"), pending = countState(plan, "pending");
+        const std::string now =
+            std::to_string(countState(plan, "done")) + "/" + std::to_string(plan.jobs.size()) +
+            " done, " + std::to_string(countState(plan, "failed")) + " failed, " +
+            std::to_string(running) + " running, " + std::to_string(pending) + " queued";
+        if (now != last) {
+            writePlan(o.outDir, plan);
+            say("batch: " + now);
+            last = now;
+        }
+        if (running == 0 && pending == 0) break;
+        std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+    const int failed = countState(plan, "failed");
+    out << PROGRAM << ": batch finished: " << countState(plan, "done") << "/" << plan.jobs.size()
+        << " done, " << failed << " failed, " << duration(secondsSince(start)) << "; "
+        << (fs::path(o.outDir) / "plan.json").string() << "\n";
+    for (const Job& j : plan.jobs)
+        if (j.state == "failed")
+            out << PROGRAM << ": failed: " << j.name << ": " << j.error << "\n";
+    return failed > 0 ? EXIT_JOBS_FAILED : EXIT_OK;
+}
+
 } // namespace
 
 std::string
@@ -880,6 +1161,9 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
                              "' holds another batch (other plan, inputs or match options); "
                              "use another -o, or remove it");
         }
+        plan.executor = old.executor;
+        plan.slurmJobId = old.slurmJobId;
+        plan.slurmTasks = old.slurmTasks;
         for (std::size_t i = 0; i < plan.jobs.size(); ++i) {
             plan.jobs[i].state = old.jobs[i].state;
             plan.jobs[i].seconds = old.jobs[i].seconds;
@@ -887,6 +1171,13 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
             plan.jobs[i].exitCode = old.jobs[i].exitCode;
         }
     }
+    if (o.executor == "slurm") return submitSlurm(o, plan, out, err);
+    if (plan.executor == "slurm" && !activeSlurmTasks(plan).empty()) {
+        throw UsageError("slurm job " + plan.slurmJobId +
+                         " of this batch is still queued or running; wait for it (batch status)");
+    }
+    plan.executor = "local";
+    writeJobList(o.outDir, plan, selfExecutable(), 1);
     return runPlan(o, plan, out, err);
 }
 
