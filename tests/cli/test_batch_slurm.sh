@@ -152,6 +152,12 @@ grep -q '6 jobs: 6 done' "$SCRATCH/out" && ok "batch status of a slurm batch" ||
 "$VDB_MATCH" batch collect "$SCRATCH/slurm" --quiet >"$SCRATCH/out" 2>&1 && cmp -s "$SCRATCH/slurm/distances.csv" <("$VDB_MATCH" batch collect "$SCRATCH/local" --quiet >/dev/null && cat "$SCRATCH/local/distances.csv") &&
     ok "collect: the same distances.csv as the local batch" || fail "collect: $(cat "$SCRATCH/out")"
 
+"$PYTHON" -c "
+import json, sys
+s = json.load(open(sys.argv[1] + '/summary.json'))
+sys.exit(0 if all(r['seconds'] > 0 and r['peakMemoryMB'] > 0 for r in s['results']) else 1)" "$SCRATCH/slurm" &&
+    ok "collect: time and memory of each task from its report" || fail "slurm summary: no time or memory"
+
 # Resubmission: only the job whose outputs are gone.
 rm "$SCRATCH/slurm/jobs/b--c/deformation.vdb"
 "$VDB_MATCH" batch --all-pairs "${SHAPES[@]}" -o "$SCRATCH/slurm" --executor slurm --wait -- --levels 4..6 >"$SCRATCH/out" 2>"$SCRATCH/err"
@@ -170,15 +176,17 @@ code=$?
     fail "refused: exit $code $(cat "$SCRATCH/err")"
 
 # With VDBMATCH_SLURM_BENCH=1: the overhead of the Slurm path on a realistic batch (the 6 pairs
-# of the bundled 3D shapes at levels 4..6), local then slurm, wall times and their ratio.
+# of the bundled 3D shapes at levels VDBMATCH_SLURM_BENCH_LEVELS, default 4..6), local then
+# slurm, wall times and their ratio.
 if [ "${VDBMATCH_SLURM_BENCH:-0}" = 1 ]; then
+    LEVELS=${VDBMATCH_SLURM_BENCH_LEVELS:-4..6}
     B=("$ASSETS/starfish_a.vdb" "$ASSETS/starfish_b.vdb" "$ASSETS/sphere.vdb" "$ASSETS/ellipsoid.vdb")
     t0=$(date +%s.%N)
-    "$VDB_MATCH" batch --all-pairs "${B[@]}" -o "$SCRATCH/bench_local" --quiet -- --levels 4..6 >/dev/null
+    "$VDB_MATCH" batch --all-pairs "${B[@]}" -o "$SCRATCH/bench_local" --quiet -- --levels "$LEVELS" >/dev/null
     t1=$(date +%s.%N)
-    "$VDB_MATCH" batch --all-pairs "${B[@]}" -o "$SCRATCH/bench_slurm" --quiet --executor slurm --wait -- --levels 4..6 >/dev/null
+    "$VDB_MATCH" batch --all-pairs "${B[@]}" -o "$SCRATCH/bench_slurm" --quiet --executor slurm --wait -- --levels "$LEVELS" >/dev/null
     t2=$(date +%s.%N)
-    echo "bench: 6 pairs 3D 4..6: local $(echo "$t1 - $t0" | bc) s, slurm $(echo "$t2 - $t1" | bc) s, ratio $(echo "scale=3; ($t2 - $t1) / ($t1 - $t0)" | bc)"
+    echo "bench: 6 pairs 3D $LEVELS: local $(echo "$t1 - $t0" | bc) s, slurm $(echo "$t2 - $t1" | bc) s, ratio $(echo "scale=3; ($t2 - $t1) / ($t1 - $t0)" | bc)"
 fi
 
 echo "$count checks passed, $failures failed"

@@ -164,6 +164,18 @@ check "-o after -- is batch's" 1 '' 'set by batch' -- \
 check "a missing shape" 2 '' 'cannot read the shape' -- \
     batch --all-pairs "$S/a.polyline" "$S/nothere.polyline" -o "$SCRATCH/d"
 check "status of a folder without a batch" 2 '' 'no plan.json' -- batch status "$SCRATCH"
+check "an unwritable OUTDIR" 2 '' 'output directory' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" -o /proc/vdbmatch-batch-test
+# A Slurm that is not there: no sbatch on the PATH.
+count=$((count + 1))
+env PATH=/nonexistent "$VDB_MATCH" batch --all-pairs "$S/a.polyline" "$S/b.polyline" -o "$SCRATCH/noslurm" \
+    --executor slurm "${LEVELS[@]}" >"$SCRATCH/out" 2>"$SCRATCH/err"
+code=$?
+if [ $code -eq 2 ] && grep -q 'sbatch is not installed' "$SCRATCH/err" && [ "$(state "$SCRATCH/noslurm" a--b)" = pending ]; then
+    echo "ok   no Slurm: exit code 2, the reason, nothing marked done"
+else
+    fail "no Slurm: exit $code: $(cat "$SCRATCH/err")"
+fi
 
 # Ctrl-C: the running jobs stop, the batch exits 5, and the same command redoes them.
 "$VDB_MATCH" batch --all-pairs "$ASSETS/sphere.vdb" "$ASSETS/ellipsoid.vdb" --both-directions \

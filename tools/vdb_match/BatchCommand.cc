@@ -720,6 +720,15 @@ refreshSlurmStates(const std::string& outDir, Plan& p)
         if (outputsVerified(dir, &why)) {
             j.state = "done";
             j.error.clear();
+            // A task's time and memory, as its match reported them (no accounting needed).
+            std::ifstream f(fs::path(dir) / "report.json");
+            try {
+                const Json r = Json::parse(f).at("result");
+                j.seconds =
+                    r.at("seconds").value("match", 0.0) + r.at("seconds").value("write", 0.0);
+                j.peakMemoryMB = r.value("peakMemoryMB", 0.0);
+            } catch (const Json::exception&) {
+            }
         } else {
             j.state = "failed";
             j.error = lastErrorLine((fs::path(dir) / "log.txt").string());

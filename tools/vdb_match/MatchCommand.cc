@@ -39,6 +39,7 @@
 #include <sstream>
 #include <string>
 #include <sys/file.h>
+#include <sys/resource.h>
 #include <unistd.h>
 #include <utility>
 #include <vector>
@@ -573,6 +574,15 @@ minDeterminantAsHalf(const openvdb::Vec3SGrid& grid)
 
 /// report.json (docs/cli.md): keys in a fixed order, numbers in their shortest round-trip form,
 /// non-finite numbers as null.
+/// Peak resident memory of this process so far, MB (getrusage).
+double
+peakMemoryMB()
+{
+    struct rusage ru;
+    if (getrusage(RUSAGE_SELF, &ru) != 0) return 0;
+    return double(ru.ru_maxrss) / 1024.0; // kilobytes on Linux
+}
+
 template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
@@ -680,7 +690,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                                          {"meanUnit", r.residual.meanUnit},
                                          {"maxUnit", r.residual.maxUnit},
                                          {"samples", r.residual.samples}}},
-                       {"seconds", Json{{"match", r.totalSeconds}, {"write", writeSeconds}}}};
+                       {"seconds", Json{{"match", r.totalSeconds}, {"write", writeSeconds}}},
+                       {"peakMemoryMB", peakMemoryMB()}};
     if (extra.inverse) {
         j["inverse"] = Json{{"nodes", extra.inverseNodes},
                             {"failures", extra.inverseFailures},
