@@ -7,7 +7,7 @@ PACKAGES=(
   libopenvdb-dev libtbb-dev libeigen3-dev libopenimageio-dev libboost-iostreams-dev
   libgtest-dev libbenchmark-dev nlohmann-json3-dev libcli11-dev
   libopenvdb-tools python3-openvdb python3-numpy openimageio-tools clang-format time
-  python3-dev pybind11-dev python3-pytest python3-tqdm
+  python3-dev pybind11-dev python3-pytest python3-tqdm python3-matplotlib
 )
 missing=()
 for p in "${PACKAGES[@]}"; do

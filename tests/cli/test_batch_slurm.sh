@@ -93,12 +93,8 @@ done
 sinfo -h -o '%t' | grep -q idle || skip "the node did not come up: $(sinfo 2>&1 | tail -1)"
 echo "single-node Slurm up: $HOST, $CPUS CPUs, $MEM MB"
 
-failures=0
-count=0
-fail() {
-    failures=$((failures + 1))
-    echo "FAIL $1"
-}
+source "$(dirname "$0")/common.sh"
+# ok NAME: records a passed check (common.sh has fail and the counters).
 ok() {
     count=$((count + 1))
     echo "ok   $1"

@@ -160,19 +160,23 @@ requireReadable(const std::string& path, const std::string& what)
     }
 }
 
+/// The first and last frame of --frames A-B.
+std::pair<int, int>
+frameRange(const std::string& range)
+{
+    const auto dash = range.find('-', 1);
+    if (dash == std::string::npos) throw UsageError("--frames: expected A-B, got '" + range + "'");
+    const int a = parseInt("--frames", range.substr(0, dash));
+    const int b = parseInt("--frames", range.substr(dash + 1));
+    if (b <= a) throw UsageError("--frames: " + range + " needs at least two frames (A < B)");
+    return {a, b};
+}
+
 /// The frame files of a sequence pattern: #### (as many digits as #), $F4 or %04d.
 std::vector<std::string>
 sequenceFiles(const std::string& pattern, const std::string& range)
 {
-    int a = 0, b = -1;
-    {
-        const auto dash = range.find('-', 1);
-        if (dash == std::string::npos)
-            throw UsageError("--frames: expected A-B, got '" + range + "'");
-        a = parseInt("--frames", range.substr(0, dash));
-        b = parseInt("--frames", range.substr(dash + 1));
-        if (b <= a) throw UsageError("--frames: " + range + " needs at least two frames (A < B)");
-    }
+    const auto [a, b] = frameRange(range);
     std::string prefix, suffix;
     int width = 0;
     if (auto p = pattern.find('#'); p != std::string::npos) {
@@ -231,14 +235,13 @@ makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
         if (o.frames.empty()) throw UsageError("--sequence needs --frames A-B");
         plan.kind = "sequence";
         shapes = sequenceFiles(o.sequence, o.frames);
-        plan.firstFrame = std::stoi(o.frames.substr(0, o.frames.find('-', 1)));
+        plan.firstFrame = frameRange(o.frames).first;
     } else {
         if (!o.frames.empty()) throw UsageError("--frames goes with --sequence");
         plan.kind = o.allPairs ? "all-pairs" : "template";
         if (!o.templateShape.empty()) shapes.push_back(o.templateShape);
         shapes.insert(shapes.end(), files.begin(), files.end());
-        const std::size_t minimum = o.allPairs ? 2 : 2;
-        if (shapes.size() < minimum) {
+        if (shapes.size() < 2) {
             throw UsageError(o.allPairs ? "--all-pairs needs at least two FILES"
                                         : "--template T needs at least one FILE");
         }
@@ -355,9 +358,15 @@ readPlan(const std::string& outDir)
 }
 
 std::string
+jobDir(const std::string& outDir, const std::string& name)
+{
+    return (fs::path(outDir) / "jobs" / name).string();
+}
+
+std::string
 jobDir(const std::string& outDir, const Job& j)
 {
-    return (fs::path(outDir) / "jobs" / j.name).string();
+    return jobDir(outDir, j.name);
 }
 
 /// A finished job's outputs are there and whole: report.json of a run that was not
@@ -925,9 +934,8 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
             const std::string reverse = stemOf(j.target) + "--" + stemOf(j.source);
             if (reports.count(reverse)) {
                 const std::string phi = (fs::path(jobDir(outDir, j)) / "deformation.vdb").string();
-                Job rj;
-                rj.name = reverse;
-                const std::string psi = (fs::path(jobDir(outDir, rj)) / "deformation.vdb").string();
+                const std::string psi =
+                    (fs::path(jobDir(outDir, reverse)) / "deformation.vdb").string();
                 std::vector<std::string> args = {PROGRAM,    "consistency", phi,
                                                  psi,        "--source",    j.source,
                                                  "--target", j.target,      "--json"};

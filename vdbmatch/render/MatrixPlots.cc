@@ -3,12 +3,12 @@
 
 #include <vdbmatch/render/BitmapFont.h>
 #include <vdbmatch/render/ColorMap.h>
+#include <vdbmatch/render/Preview.h>
 
 #include <openvdb/Exceptions.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 namespace vdbmatch {
 namespace render {
@@ -19,14 +19,6 @@ constexpr Rgb8 WHITE{255, 255, 255};
 constexpr Rgb8 BLACK{0, 0, 0};
 constexpr Rgb8 GREY{160, 160, 160};
 constexpr int MARGIN = 12;
-
-std::string
-shortNumber(double x)
-{
-    char buf[32];
-    std::snprintf(buf, sizeof(buf), "%.3g", x);
-    return buf;
-}
 
 } // namespace
 
@@ -95,7 +87,7 @@ distanceHeatMap(const eval::DistanceMatrix& m, const std::vector<std::string>& n
                  colorMapAt(t, ColorMapKind::Inferno));
     }
     strokeRect(image, bx - 1, top - 1, bx + barWidth + 1, top + barHeight + 1, BLACK);
-    drawText(image, bx + barWidth + 6, top, shortNumber(hi), BLACK, scale);
+    drawText(image, bx + barWidth + 6, top, formatTickLabel(hi), BLACK, scale);
     drawText(image, bx + barWidth + 6, top + barHeight - textHeight(scale), "0", BLACK, scale);
     return image;
 }
