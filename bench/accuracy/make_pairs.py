@@ -79,10 +79,10 @@ def logistic(s):
     return 1.0 / (1.0 + np.exp(-s))
 
 
-def rk4_flow(x, velocity, steps=FLOW_STEPS):
-    """x(1) for dx/dt = velocity(x, t), x(0) = x, t in [0, 1]."""
+def rk4_flow(x, velocity, steps=FLOW_STEPS, t_end=1.0):
+    """x(t_end) for dx/dt = velocity(x, t), x(0) = x (steps RK4 steps over [0, t_end])."""
     x = np.array(x, dtype=float)
-    h = 1.0 / steps
+    h = t_end / steps
     for i in range(steps):
         t = i * h
         k1 = velocity(x, t)
@@ -103,13 +103,15 @@ def perp2(v):
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
-def limb_rotation(pivot, direction, degrees, start, ramp, lateral, axis=None, plane_normal=None):
+def limb_rotation(pivot, direction, degrees, start, ramp, lateral, axis=None, plane_normal=None,
+                  t_end=1.0):
     """Flow of a limb rotating by `degrees` about `pivot` (3D: about `axis`; 2D: in the plane,
     positive = counter-clockwise). The rate is weighted by w = logistic((s - start)/ramp) *
     L(l), s the distance along `direction` from the pivot, l the lateral coordinate
     (2D: along perp(direction); 3D: along plane_normal x direction), L = `lateral`(l) a smooth
     window; w is evaluated in the frame rotated back by the angle reached at time t, so the part
-    of the limb where w = 1 turns rigidly."""
+    of the limb where w = 1 turns rigidly. t_end < 1: the flow stopped at that time (the motion
+    so far, for sequences: make_sequence.py)."""
     pivot = np.asarray(pivot, dtype=float)
     d = np.asarray(direction, dtype=float)
     d = d / np.linalg.norm(d)
@@ -131,7 +133,7 @@ def limb_rotation(pivot, direction, degrees, start, ramp, lateral, axis=None, pl
             w = logistic((back @ d - start) / ramp) * lateral(back @ lat_dir)
             return omega * w[:, None] * np.cross(a, x - pivot)
 
-    return lambda x: rk4_flow(x, velocity)
+    return lambda x: rk4_flow(x, velocity, t_end=t_end)
 
 
 def window(half_width, power=4):

@@ -153,6 +153,43 @@ PY
     [ "$result" = ok ] && echo "ok   sequence: composed.0002.vdb is the first map" || fail "$result"
 fi
 
+# Warm starts along the sequence: one chain, job k started from job k-1's map (match
+# --warm-start), recorded in plan.json, the reports and jobs.txt; resume keeps the chain.
+check "sequence --warm-start" 0 '3/3 done' '' -- \
+    batch --sequence "$SCRATCH/morph/fig.####.polyline" --frames 1-4 --warm-start -o "$SCRATCH/warmout" --quiet -- --levels 4..6
+count=$((count + 1))
+result=$("$PYTHON" - "$SCRATCH/warmout" <<'PY'
+import json, sys
+d = sys.argv[1]
+p = json.load(open(d + "/plan.json"))
+jobs = p["jobs"]
+problems = []
+if p.get("warmStart") is not True: problems.append("plan.warmStart")
+if [j["warmStartFrom"] for j in jobs] != [None, 0, 1]: problems.append("warmStartFrom %s" % [j["warmStartFrom"] for j in jobs])
+if [j["warmStarted"] for j in jobs] != [False, True, True]: problems.append("warmStarted")
+for k, j in enumerate(jobs):
+    r = json.load(open(d + "/jobs/" + j["name"] + "/report.json"))
+    if k == 0 and r["init"] is not None: problems.append("job 0 init")
+    if k > 0:
+        i = r["init"] or {}
+        if i.get("kind") != "warm-start" or not i.get("path", "").endswith(jobs[k - 1]["name"] + "/deformation.vdb") or [l["level"] for l in r["levels"]] != [5, 6]:
+            problems.append("job %d report init %s levels %s" % (k, i, [l["level"] for l in r["levels"]]))
+lines = open(d + "/jobs.txt").read().splitlines()
+if "--warm-start" in lines[0] or "if [ -s " not in lines[1] or "--warm-start" not in lines[2]: problems.append("jobs.txt")
+print("ok" if not problems else "; ".join(problems))
+PY
+)
+[ "$result" = ok ] && echo "ok   sequence --warm-start: a chain in plan.json, the reports and jobs.txt" || fail "$result"
+check "warm-start status" 0 'fig.0002--fig.0003  done .*\(warm start\)' '' -- batch status "$SCRATCH/warmout"
+check "warm-start collect" 0 '3 of 3 jobs done' '' -- batch collect "$SCRATCH/warmout" --quiet
+expect "warm-start: the sequence collected" test -s "$SCRATCH/warmout/sequence/deformed.0004.obj"
+check "warm-start is another plan" 1 '' 'holds another batch' -- \
+    batch --sequence "$SCRATCH/morph/fig.####.polyline" --frames 1-4 -o "$SCRATCH/warmout" --quiet -- --levels 4..6
+check "warm-start goes with --sequence" 1 '' '--warm-start goes with --sequence' -- \
+    batch --all-pairs "$S/a.polyline" "$S/b.polyline" --warm-start -o "$SCRATCH/w2"
+check "--warm-start after -- is batch's" 1 '' "'--warm-start' after -- is set by batch" -- \
+    batch --sequence "$SCRATCH/morph/fig.####.polyline" --frames 1-4 -o "$SCRATCH/w3" -- --warm-start x.vdb
+
 # Usage errors.
 mkdir -p "$SCRATCH/dup"
 cp "$S/a.polyline" "$SCRATCH/dup/a.polyline"

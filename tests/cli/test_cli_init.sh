@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # CLI tests of `vdb_match match --init DEFORMATION.vdb`: a 4..5 result continued into 4..6 (only
 # level 6 runs) and resumed at its own last level, an interrupted result resumed at its level,
-# and the refusals: another placement, another dimension, not a deformation, a fold.
+# and the refusals: another placement, another dimension, not a deformation, a fold. And
+# `--warm-start` (another pair's map, carried through world space): the map carried into another
+# placement, the levels it skips, and its refusals.
 # Usage: test_cli_init.sh VDB_MATCH ASSETS_DIR
 set -uo pipefail
 
@@ -84,6 +86,48 @@ r = json.load(open(sys.argv[1]))
 assert r["init"]["interrupted"] and [l["level"] for l in r["levels"]] == [5, 6], r["levels"]
 PY
 
+# ---------------------------------------------------------------- --warm-start
+# The same pair placed with another margin (another scale and origin): the map of result a,
+# carried through world space and sampled at the new level-5 nodes, is phi at the start; with no
+# iteration the result is that start. It must agree with a's own phi on the source's vertices
+# to interpolation error, far below the displacement itself (a wrong scale or origin would not).
+check warm-carried 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/w" --margin 0.15 --levels 4..5 --warm-start "$SCRATCH/a/deformation.vdb" --warm-start-level 5 --max-iterations 0 "${COMMON[@]}"
+pycheck warm-carried-map - "$SCRATCH/w" "$SCRATCH/a" "$FIGURE_A" <<'PY'
+import json, sys
+import numpy as np
+w, a, src = sys.argv[1:4]
+r = json.load(open(w + "/report.json"))
+assert r["init"]["kind"] == "warm-start" and r["init"]["startLevel"] == 5, r["init"]
+assert [l["level"] for l in r["levels"]] == [5] and r["parameters"]["minLevel"] == 4, r["levels"]
+assert r["placement"]["margin"] == 0.15
+ra = json.load(open(a + "/report.json"))
+assert abs(r["placement"]["scale"] - ra["placement"]["scale"]) > 1e-3 * ra["placement"]["scale"]
+def polyline(path):
+    return np.array([[float(x) for x in l.split()[:2]] for l in open(path)
+                     if l.strip() and not l.startswith("#")])
+v = polyline(src)
+def obj(path):
+    return np.array([[float(x) for x in l.split()[1:3]] for l in open(path) if l.startswith("v ")])
+pw, pa = obj(w + "/deformed.obj"), obj(a + "/deformed.obj")
+assert len(pw) == len(pa) == len(v), (len(pw), len(pa), len(v))
+moved = np.linalg.norm(pa - v, axis=1).mean()
+diff = np.linalg.norm(pw - pa, axis=1).mean()
+assert moved > 0 and diff < 0.1 * moved, (diff, moved)
+print(diff, moved)
+PY
+# The default start level is the last minus one; the run is a normal match from there.
+check warm-default-level 0 '' 'warm start from' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/w2" --levels 4..6 --warm-start "$SCRATCH/a/deformation.vdb" --no-inverse --no-jacobian --threads 2
+pycheck warm-default-level-report - "$SCRATCH/w2/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["init"]["kind"] == "warm-start" and [l["level"] for l in r["levels"]] == [5, 6], r["levels"]
+assert r["status"] == "converged" and r["result"]["minJacobian"] > 0, r["status"]
+PY
+check warm-and-init 1 '' '--init .* and --warm-start .* cannot be combined' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --init "$SCRATCH/a/deformation.vdb" --warm-start "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+check warm-level-alone 1 '' '--warm-start-level needs --warm-start' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --warm-start-level 5 "${COMMON[@]}"
+check warm-level-outside 1 '' '--warm-start-level 7 is outside the levels 4\.\.6' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --warm-start "$SCRATCH/a/deformation.vdb" --warm-start-level 7 "${COMMON[@]}"
+check warm-other-dimension 3 '' 'is a 2D deformation but the inputs are 3D' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --levels 3..4 --warm-start "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
+
 # ---------------------------------------------------------------- refusals
 check other-margin 3 '' 'another placement .*--margin 0\.2, this run --margin 0\.1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --margin 0.1 --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
 check other-shapes 3 '' 'another placement' -- "$FIGURE_A" "$FIGURE_A" -o "$SCRATCH/o" --init "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
@@ -108,6 +152,7 @@ for i in range(n + 1):
 vdb.write(sys.argv[2], grids=[g], metadata=meta)
 PY
 check folds 3 '' 'sampled at the nodes of the level 6 lattice folds' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --init "$SCRATCH/folded.vdb" "${COMMON[@]}"
+check warm-folds 3 '' 'warm-start .* folds' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --warm-start "$SCRATCH/folded.vdb" "${COMMON[@]}"
 count=$((count + 1))
 if [ -e "$SCRATCH/o/deformation.vdb" ] || [ -e "$SCRATCH/o/report.json" ]; then
     fail "refusals-write-nothing: a refused --init left outputs in OUTDIR"

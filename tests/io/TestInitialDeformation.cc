@@ -1,9 +1,11 @@
 /// @file TestInitialDeformation.cc
 /// @brief A deformation grid as the start of a match (--init): a 4..6 result continued at level 7
-///        against 4..7 from scratch; refused placements, dimensions and folds.
+///        against 4..7 from scratch; refused placements, dimensions and folds; another pair's map
+///        carried through world space (--warm-start).
 #include "../support/TestSurfaces.h"
 
 #include <vdbmatch/Match.h>
+#include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/io/InitialDeformation.h>
 
@@ -147,6 +149,61 @@ TEST_F(InitialDeformationTest, RefusesAnotherPlacementOrDimension)
     EXPECT_THROW(initialDeformationFromGrid(grid, otherShapes, 2, "x"), openvdb::ValueError);
     EXPECT_THROW(initialDeformationFromGrid(grid, placement, 3, "x"), openvdb::ValueError);
     EXPECT_NO_THROW(initialDeformationFromGrid(grid, placement, 2, "x"));
+}
+
+TEST_F(InitialDeformationTest, CarriesAnotherPairsMapThroughWorldSpace)
+{
+    // --warm-start: the grid of one placement read for another (other margin, other shapes):
+    // accepted, and u at a point of the new Omega is the world displacement of the old phi at
+    // that world point, in the new Omega units; 0 where the world point is outside the old Omega.
+    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 3;
+    opts.multiscale.maxLevel = 5;
+    const MatchResult<2> r = match<2>(circle, ellipse, placement, opts);
+    ASSERT_TRUE(r.isComplete());
+    const openvdb::Vec3SGrid::Ptr grid = resultGrid(r, 3);
+    const DeformationField field(grid);
+
+    const Surface<2> moved = ellipseCurve(Vec<2>(4.5, -0.3), 2.2, 2.0, 400);
+    const UnitBoxPlacement other = placeInUnitBox<2>(moved, ellipse, 0.35);
+    ASSERT_GT(std::abs(other.scale - placement.scale), 1e-3 * placement.scale);
+    EXPECT_THROW(initialDeformationFromGrid(grid, other, 2, "x"), openvdb::ValueError);
+    const InitialDeformation init =
+        initialDeformationFromGrid(grid, other, 2, "x", InitPlacement::Carried);
+    double largest = 0;
+    int outside = 0;
+    for (int i = 0; i <= 20; ++i) {
+        for (int j = 0; j <= 20; ++j) {
+            const openvdb::Vec3d xUnit(i / 20.0, j / 20.0, 0.5);
+            const openvdb::Vec3d xWorld = other.toWorld(xUnit);
+            const openvdb::Vec3d expected = field.displacement(xWorld) * other.scale;
+            const openvdb::Vec3d u = init.start->displacement(xUnit);
+            EXPECT_NEAR(u[0], expected[0], 1e-12);
+            EXPECT_NEAR(u[1], expected[1], 1e-12);
+            largest = std::max(largest, std::hypot(u[0], u[1]));
+            if (!field.worldBounds().isInside(xWorld)) {
+                ++outside;
+                EXPECT_EQ(u[0], 0.0);
+                EXPECT_EQ(u[1], 0.0);
+            }
+        }
+    }
+    EXPECT_GT(largest, 1e-3); // the map moves the circle onto the ellipse
+    EXPECT_GT(outside, 0);    // the new Omega reaches beyond the old one
+    EXPECT_DOUBLE_EQ(init.start->lipschitz,
+                     initialDeformationFromGrid(grid, placement, 2, "x").start->lipschitz);
+
+    // A match of the other pair started from it runs and stays invertible.
+    MatchOptions warm = MatchOptions::defaults(2);
+    warm.coarsestLevel = 3;
+    warm.multiscale.minLevel = 4;
+    warm.multiscale.maxLevel = 5;
+    warm.initial = init.start;
+    const MatchResult<2> w = match<2>(moved, ellipse, other, warm);
+    ASSERT_TRUE(w.isComplete());
+    EXPECT_EQ(w.levels.front().level, 4);
+    EXPECT_GT(w.levels.back().report.minJacobian, 0);
 }
 
 TEST_F(InitialDeformationTest, RefusesAFold)

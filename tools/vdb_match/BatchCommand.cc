@@ -49,6 +49,7 @@ struct BatchCliOptions
     std::string sequence;
     std::string frames;
     bool bothDirections = false;
+    bool warmStart = false; ///< sequence: job k starts from job k-1's map
     std::string outDir;
     int jobs = 0;          ///< concurrent jobs, 0: automatic
     int threadsPerJob = 0; ///< 0: automatic
@@ -80,6 +81,11 @@ batchOptionTable()
          [](O& o, const std::string& v) { o.sequence = v; }},
         {"--frames", "A-B", "Plan", "the frame range of --sequence, e.g. 1-240",
          [](O& o, const std::string& v) { o.frames = v; }},
+        {"--warm-start", nullptr, "Plan",
+         "with --sequence: start each pair k -> k+1 from the map of k-1 -> k (match "
+         "--warm-start, from the last level minus one); the jobs then run one after the other, "
+         "each with every core (docs/batch.md: when it helps)",
+         [](O& o, const std::string&) { o.warmStart = true; }},
         {"--output,-o", "OUTDIR", "Output",
          "batch directory: plan.json and jobs/NAME/ (the outputs of each match) (required)",
          [](O& o, const std::string& v) { o.outDir = v; }},
@@ -118,6 +124,8 @@ struct Job
     std::string name;
     std::string source, target;    ///< absolute paths
     std::string state = "pending"; ///< pending, done, failed, interrupted
+    int warmFrom = -1;             ///< warm-start plans: the job whose map starts this one, or -1
+    bool warmStarted = false;      ///< it did start from that map (false: its job had failed)
     int exitCode = -1;
     std::string error;
     double seconds = 0;
@@ -126,8 +134,9 @@ struct Job
 
 struct Plan
 {
-    std::string kind;   ///< all-pairs, template, sequence
-    int firstFrame = 0; ///< sequence: the frame number of inputs[0]
+    std::string kind;       ///< all-pairs, template, sequence
+    int firstFrame = 0;     ///< sequence: the frame number of inputs[0]
+    bool warmStart = false; ///< sequence: job k starts from job k-1's map (a chain)
     std::string executor = "local";
     std::string slurmJobId;      ///< slurm: the array job of the last submission
     std::vector<int> slurmTasks; ///< slurm: the jobs submitted (array index = job index)
@@ -227,6 +236,7 @@ makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
             "batch: give exactly one of --all-pairs, --template T, --sequence PATTERN");
     if (o.bothDirections && !o.allPairs)
         throw UsageError("--both-directions goes with --all-pairs");
+    if (o.warmStart && o.sequence.empty()) throw UsageError("--warm-start goes with --sequence");
     Plan plan;
     plan.matchArguments = matchArgs;
     std::vector<std::string> shapes;
@@ -276,8 +286,11 @@ makePlan(const BatchCliOptions& o, const std::vector<std::string>& files,
         for (std::size_t j = 1; j < n; ++j)
             if (plan.inputs[j] != plan.inputs[0]) add(0, j);
     } else {
-        for (std::size_t k = 0; k + 1 < n; ++k)
+        for (std::size_t k = 0; k + 1 < n; ++k) {
             add(k, k + 1);
+            if (o.warmStart && k > 0) plan.jobs.back().warmFrom = int(k) - 1;
+        }
+        plan.warmStart = o.warmStart;
     }
     std::set<std::string> names;
     for (const Job& j : plan.jobs)
@@ -296,13 +309,18 @@ planJson(const Plan& p)
                             {"target", j.target},
                             {"directory", "jobs/" + j.name},
                             {"state", j.state},
+                            {"warmStartFrom", j.warmFrom >= 0 ? Json(j.warmFrom) : Json()},
+                            {"warmStarted", j.warmStarted},
                             {"exitCode", j.exitCode},
                             {"error", j.error},
                             {"seconds", j.seconds},
                             {"peakMemoryMB", j.peakMemoryMB}});
     }
     Json plan{{"vdbmatch", VDBMATCH_VERSION}, {"plan", p.kind}};
-    if (p.kind == "sequence") plan["firstFrame"] = p.firstFrame;
+    if (p.kind == "sequence") {
+        plan["firstFrame"] = p.firstFrame;
+        plan["warmStart"] = p.warmStart;
+    }
     plan["inputs"] = p.inputs;
     plan["matchArguments"] = p.matchArguments;
     plan["executor"] = p.executor;
@@ -332,6 +350,7 @@ readPlan(const std::string& outDir)
         Plan p;
         p.kind = j.at("plan").get<std::string>();
         p.firstFrame = j.value("firstFrame", 0);
+        p.warmStart = j.value("warmStart", false);
         p.executor = j.value("executor", std::string("local"));
         if (j.contains("slurm")) {
             p.slurmJobId = j["slurm"].value("jobId", std::string());
@@ -345,6 +364,9 @@ readPlan(const std::string& outDir)
             job.source = e.at("source").get<std::string>();
             job.target = e.at("target").get<std::string>();
             job.state = e.at("state").get<std::string>();
+            if (e.contains("warmStartFrom") && e["warmStartFrom"].is_number_integer())
+                job.warmFrom = e["warmStartFrom"].get<int>();
+            job.warmStarted = e.value("warmStarted", false);
             job.exitCode = e.value("exitCode", -1);
             job.error = e.value("error", std::string());
             job.seconds = e.value("seconds", 0.0);
@@ -431,17 +453,18 @@ struct Child
     Clock::time_point start;
 };
 
-/// Starts `vdb_match match SOURCE TARGET -o DIR --quiet --threads T ARGS...`, output to
-/// DIR/log.txt.
+/// Starts `vdb_match match SOURCE TARGET -o DIR --quiet --threads T [--warm-start W] ARGS...`,
+/// output to DIR/log.txt.
 pid_t
 startJob(const std::string& exe, const std::string& outDir, const Job& job,
-         const std::vector<std::string>& matchArgs, int threads)
+         const std::vector<std::string>& matchArgs, int threads, const std::string& warmStart)
 {
     const std::string dir = jobDir(outDir, job);
     createOutputDirectory(dir);
     std::vector<std::string> args = {exe,        "match",     job.source,
                                      job.target, "-o",        dir,
                                      "--quiet",  "--threads", std::to_string(threads)};
+    if (!warmStart.empty()) args.insert(args.end(), {"--warm-start", warmStart});
     args.insert(args.end(), matchArgs.begin(), matchArgs.end());
     std::vector<char*> argv;
     for (std::string& a : args)
@@ -480,19 +503,37 @@ shellQuote(const std::string& s)
     return q + "'";
 }
 
+/// The deformation a job of a warm-start plan starts from (its predecessor's), or "".
+std::string
+warmStartFile(const std::string& outDir, const Plan& plan, const Job& job)
+{
+    if (job.warmFrom < 0) return {};
+    return absolutePath(
+        (fs::path(jobDir(outDir, plan.jobs[std::size_t(job.warmFrom)])) / "deformation.vdb")
+            .string());
+}
+
 /// The shell line of a job, as in jobs.txt: its folder made, then the match with its output
-/// in DIR/log.txt.
+/// in DIR/log.txt. A job of a warm-start plan starts from @a warmStart when that file is there
+/// (its job succeeded), else from the identity.
 std::string
 jobCommandLine(const std::string& exe, const std::string& outDir, const Job& job,
-               const std::vector<std::string>& matchArgs, int threads)
+               const std::vector<std::string>& matchArgs, int threads,
+               const std::string& warmStart = {})
 {
     const std::string dir = absolutePath(jobDir(outDir, job));
-    std::string line = "mkdir -p " + shellQuote(dir) + " && exec " + shellQuote(exe) + " match " +
-                       shellQuote(job.source) + " " + shellQuote(job.target) + " -o " +
-                       shellQuote(dir) + " --quiet --threads " + std::to_string(threads);
+    std::string match = shellQuote(exe) + " match " + shellQuote(job.source) + " " +
+                        shellQuote(job.target) + " -o " + shellQuote(dir) + " --quiet --threads " +
+                        std::to_string(threads);
+    std::string options;
     for (const std::string& a : matchArgs)
-        line += " " + shellQuote(a);
-    return line + " > " + shellQuote(dir + "/log.txt") + " 2>&1";
+        options += " " + shellQuote(a);
+    const std::string log = " > " + shellQuote(dir + "/log.txt") + " 2>&1";
+    if (warmStart.empty())
+        return "mkdir -p " + shellQuote(dir) + " && exec " + match + options + log;
+    return "mkdir -p " + shellQuote(dir) + " && if [ -s " + shellQuote(warmStart) +
+           " ]; then exec " + match + " --warm-start " + shellQuote(warmStart) + options + log +
+           "; else exec " + match + options + log + "; fi";
 }
 
 /// OUTDIR/jobs.txt: line k + 1 is the shell command of job k (docs/batch.md).
@@ -501,7 +542,9 @@ writeJobList(const std::string& outDir, const Plan& plan, const std::string& exe
 {
     std::string text;
     for (const Job& j : plan.jobs)
-        text += jobCommandLine(exe, outDir, j, plan.matchArguments, threads) + "\n";
+        text += jobCommandLine(exe, outDir, j, plan.matchArguments, threads,
+                               warmStartFile(outDir, plan, j)) +
+                "\n";
     writeFileAtomically((fs::path(outDir) / "jobs.txt").string(),
                         [&](std::ostream& os) { os << text; });
 }
@@ -584,7 +627,8 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
     // One job per core with one thread each: the 1 -> 2 thread speed-up of a match is 1.78-1.86
     // (docs/performance.md), so two 1-thread jobs finish more work per second than one 2-thread
     // job; when fewer jobs than cores are left, each gets the cores left over.
-    const int concurrency = o.jobs > 0 ? o.jobs : cores;
+    // A warm-start plan is a chain: each job waits for the one before, so one runs at a time.
+    const int concurrency = plan.warmStart ? 1 : o.jobs > 0 ? o.jobs : cores;
     say("batch: " + plan.kind + ", " + std::to_string(plan.jobs.size()) + " jobs (" +
         std::to_string(skipped) + " already done), " + std::to_string(concurrency) +
         " at a time, in " + o.outDir);
@@ -603,18 +647,27 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
                 kill(c.pid, SIGTERM);
         }
         while (!stopping && next < todo.size() && int(running.size()) < concurrency) {
+            Job& job = plan.jobs[todo[next]];
+            // A warm-started job starts from its predecessor's map once that job is done, or
+            // from the identity if it failed.
+            std::string warm;
+            if (job.warmFrom >= 0) {
+                const Job& from = plan.jobs[std::size_t(job.warmFrom)];
+                if (from.state == "running" || from.state == "pending") break;
+                if (from.state == "done") warm = warmStartFile(o.outDir, plan, job);
+            }
+            job.warmStarted = !warm.empty();
             const std::size_t left = todo.size() - next + running.size();
             const int threads =
                 o.threadsPerJob > 0
                     ? o.threadsPerJob
                     : std::max(1,
                                cores / int(std::min<std::size_t>(left, std::size_t(concurrency))));
-            Job& job = plan.jobs[todo[next]];
             Child c;
             c.job = todo[next];
             c.start = Clock::now();
             try {
-                c.pid = startJob(exe, o.outDir, job, plan.matchArguments, threads);
+                c.pid = startJob(exe, o.outDir, job, plan.matchArguments, threads, warm);
             } catch (const openvdb::Exception& e) {
                 job.state = "failed";
                 job.error = e.what();
@@ -732,10 +785,13 @@ refreshSlurmStates(const std::string& outDir, Plan& p)
             // A task's time and memory, as its match reported them (no accounting needed).
             std::ifstream f(fs::path(dir) / "report.json");
             try {
-                const Json r = Json::parse(f).at("result");
+                const Json report = Json::parse(f);
+                const Json& r = report.at("result");
                 j.seconds =
                     r.at("seconds").value("match", 0.0) + r.at("seconds").value("write", 0.0);
                 j.peakMemoryMB = r.value("peakMemoryMB", 0.0);
+                j.warmStarted = report.contains("init") && report["init"].is_object() &&
+                                report["init"].value("kind", std::string()) == "warm-start";
             } catch (const Json::exception&) {
             }
         } else {
@@ -762,6 +818,7 @@ statusCommand(const std::string& outDir, std::ostream& out)
     for (const Job& j : p.jobs) {
         out << j.name << "  " << j.state;
         if (j.seconds > 0) out << "  " << duration(j.seconds);
+        if (j.warmStarted) out << "  (warm start)";
         if (!j.error.empty()) out << "  " << j.error;
         out << "\n";
     }
@@ -923,6 +980,7 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
         Json e{{"name", j.name},   {"source", j.source},   {"target", j.target},
                {"state", j.state}, {"seconds", j.seconds}, {"peakMemoryMB", j.peakMemoryMB}};
         if (!j.error.empty()) e["error"] = j.error;
+        if (j.warmFrom >= 0) e["warmStarted"] = j.warmStarted;
         auto it = reports.find(j.name);
         if (it != reports.end()) {
             const Json& res = it->second.at("result");
@@ -1040,14 +1098,22 @@ submitSlurm(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostrea
         return EXIT_OK;
     }
     const std::string exe = selfExecutable();
-    const int threads = o.threadsPerJob > 0 ? o.threadsPerJob : 1;
+    // One thread per task (tasks in parallel do more work per core); a warm-start chain runs
+    // one task at a time, in index order (%1), each with two threads.
+    const int threads = o.threadsPerJob > 0 ? o.threadsPerJob : plan.warmStart ? 2 : 1;
     writeJobList(o.outDir, plan, exe, threads);
     const fs::path slurmDir = fs::path(absolutePath(o.outDir)) / "slurm";
     createOutputDirectory(slurmDir.string());
     std::string array;
     for (std::size_t k = 0; k < todo.size(); ++k)
         array += (k ? "," : "") + std::to_string(todo[k]);
-    if (o.arrayThrottle > 0) array += "%" + std::to_string(o.arrayThrottle);
+    if (plan.warmStart) {
+        if (o.arrayThrottle > 1)
+            say("batch: --warm-start runs the tasks one at a time; --array-throttle ignored");
+        array += "%1";
+    } else if (o.arrayThrottle > 0) {
+        array += "%" + std::to_string(o.arrayThrottle);
+    }
     const int memory = o.memoryPerTaskMB > 0 ? o.memoryPerTaskMB
                                              : defaultMemoryMB(finestLevel(plan.matchArguments));
     const std::string jobs = (fs::path(absolutePath(o.outDir)) / "jobs.txt").string();
@@ -1148,7 +1214,8 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
     std::vector<std::string> matchArgs(argv + std::min(sep + 1, argc), argv + argc);
     for (const std::string& a : matchArgs) {
         if (a == "-o" || a == "--output" || a.rfind("--output=", 0) == 0 || a == "--source" ||
-            a == "--target" || a == "--threads" || a == "--quiet") {
+            a == "--target" || a == "--threads" || a == "--quiet" || a == "--init" ||
+            a == "--warm-start") {
             throw UsageError("batch: '" + a + "' after -- is set by batch for each job");
         }
     }
@@ -1172,7 +1239,7 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
     std::error_code ec;
     if (fs::exists(fs::path(o.outDir) / "plan.json", ec)) {
         Plan old = readPlan(o.outDir);
-        if (old.kind != plan.kind || old.inputs != plan.inputs ||
+        if (old.kind != plan.kind || old.inputs != plan.inputs || old.warmStart != plan.warmStart ||
             old.matchArguments != plan.matchArguments || old.jobs.size() != plan.jobs.size()) {
             throw UsageError("'" + o.outDir +
                              "' holds another batch (other plan, inputs or match options); "
@@ -1186,6 +1253,7 @@ runBatchCommand(int argc, const char* const* argv, int first, std::ostream& out,
             plan.jobs[i].seconds = old.jobs[i].seconds;
             plan.jobs[i].peakMemoryMB = old.jobs[i].peakMemoryMB;
             plan.jobs[i].exitCode = old.jobs[i].exitCode;
+            plan.jobs[i].warmStarted = old.jobs[i].warmStarted;
         }
     }
     if (o.executor == "slurm") return submitSlurm(o, plan, out, err);

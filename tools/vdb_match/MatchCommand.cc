@@ -49,6 +49,10 @@ namespace cli {
 
 namespace {
 
+/// --warm-start without --warm-start-level starts at the last level minus this (measured in
+/// docs/batch.md: the coarse levels redo what the other pair's map already has).
+constexpr int DEFAULT_WARM_START_SKIP = 1;
+
 /// Options of `match`. Energy parameters and levels left unset take the defaults of the
 /// inputs' dimension (tab:parameters).
 struct MatchCliOptions
@@ -76,8 +80,10 @@ struct MatchCliOptions
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
     int deformationLevel = 0;
-    std::string config; ///< --config FILE (applied before the other options)
-    std::string init;   ///< --init DEFORMATION.vdb: start from an earlier result
+    std::string config;    ///< --config FILE (applied before the other options)
+    std::string init;      ///< --init DEFORMATION.vdb: start from an earlier result
+    std::string warmStart; ///< --warm-start DEFORMATION.vdb: start from another pair's map
+    std::optional<int> warmStartLevel;      ///< --warm-start-level L: its first level
     std::vector<std::string> landmarkFiles; ///< --landmarks A B: source and target points
     double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
@@ -136,6 +142,16 @@ matchOptionTable()
          "run starts at the first level finer than that result's finest (the same level if it "
          "was interrupted; the last requested level if it is already as fine)",
          [](O& o, const std::string& v) { o.init = v; }},
+        {"--warm-start", "DEFORMATION.vdb", "Input and output",
+         "start from the map of another pair (its deformation.vdb), e.g. frames k-1 -> k of a "
+         "sequence for k -> k+1: carried through world space into this pair's placement, it is "
+         "phi at the start of --warm-start-level (docs/batch.md says when it helps)",
+         [](O& o, const std::string& v) { o.warmStart = v; }},
+        {"--warm-start-level", "L", "Input and output",
+         "the level whose descent starts from --warm-start; the levels before it are skipped "
+         "(cells stay no coarser than the first of --levels) (default: the last level minus " +
+             std::to_string(DEFAULT_WARM_START_SKIP) + ")",
+         [](O& o, const std::string& v) { o.warmStartLevel = parseInt("--warm-start-level", v); }},
         {"--no-inverse", nullptr, "Input and output",
          "do not write inverse.vdb (the exact inverse phi^-1 at every node)",
          [](O& o, const std::string&) { o.writeInverse = false; }},
@@ -361,6 +377,13 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
+    if (!o.init.empty() && !o.warmStart.empty()) {
+        throw UsageError("--init (this pair's earlier result) and --warm-start (another pair's) "
+                         "cannot be combined");
+    }
+    if (o.warmStartLevel && o.warmStart.empty()) {
+        throw UsageError("--warm-start-level needs --warm-start");
+    }
     return o;
 }
 
@@ -604,7 +627,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                           {"margin", r.placement.margin}};
     if (init) {
         j["init"] = Json{
-            {"path", o.init},
+            {"path", o.init.empty() ? o.warmStart : o.init},
+            {"kind", o.init.empty() ? "warm-start" : "init"},
             {"levels", std::to_string(init->firstLevel) + ".." + std::to_string(init->finestLevel)},
             {"gridLevel", init->gridLevel},
             {"interrupted", init->interrupted},
@@ -806,6 +830,24 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         opts.initial = init->start;
         opts.validate(D);
         checkInterrupted();
+    } else if (!o.warmStart.empty()) {
+        if (!o.quiet) err << PROGRAM << ": reading " << o.warmStart << std::endl;
+        init = readInitialDeformation(o.warmStart, placement, D, InitPlacement::Carried);
+        const int firstRequested = opts.multiscale.minLevel;
+        const int startLevel =
+            o.warmStartLevel
+                ? *o.warmStartLevel
+                : std::max(firstRequested, opts.multiscale.maxLevel - DEFAULT_WARM_START_SKIP);
+        if (startLevel < firstRequested || startLevel > opts.multiscale.maxLevel) {
+            throw UsageError("--warm-start-level " + std::to_string(startLevel) +
+                             " is outside the levels " + std::to_string(firstRequested) + ".." +
+                             std::to_string(opts.multiscale.maxLevel));
+        }
+        opts.coarsestLevel = firstRequested;
+        opts.multiscale.minLevel = startLevel;
+        opts.initial = init->start;
+        opts.validate(D);
+        checkInterrupted();
     }
 
     // The output directory must be usable before hours of work.
@@ -819,16 +861,17 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                       : opts.multiscale.maxLevel + 1;
     ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel,
                              firstSurfaceLevel);
-    progress.message("matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) +
-                     "D, " + (o.preset == "paper" ? "preset paper, " : "") +
-                     toString(opts.multiscale.kind) + " energy, levels " +
-                     std::to_string(opts.multiscale.minLevel) + ".." +
-                     std::to_string(opts.multiscale.maxLevel) +
-                     (init ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) +
-                                 ".." + std::to_string(init->finestLevel) +
-                                 (init->interrupted ? ", interrupted" : "") + ")"
-                           : std::string()) +
-                     ")");
+    progress.message(
+        "matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) + "D, " +
+        (o.preset == "paper" ? "preset paper, " : "") + toString(opts.multiscale.kind) +
+        " energy, levels " + std::to_string(opts.multiscale.minLevel) + ".." +
+        std::to_string(opts.multiscale.maxLevel) +
+        (init && !o.init.empty()
+             ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) + ".." +
+                   std::to_string(init->finestLevel) + (init->interrupted ? ", interrupted" : "") +
+                   ")"
+             : std::string()) +
+        (init && !o.warmStart.empty() ? ", warm start from " + o.warmStart : std::string()) + ")");
     MatchObserver observer;
     observer.levelStart = [&](const LevelSummary& s) {
         progress.levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
@@ -859,7 +902,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         openvdb::StringMetadata(
             std::to_string(opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel) +
             ".." + std::to_string(result.lattice->level())));
-    if (init) deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
+    if (init && !o.init.empty())
+        deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
+    if (init && !o.warmStart.empty())
+        deformation->insertMeta("vdbmatch_warm_start", openvdb::StringMetadata(o.warmStart));
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));

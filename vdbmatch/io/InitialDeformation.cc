@@ -69,7 +69,7 @@ parseLevels(const std::string& text, int& first, int& last)
 
 InitialDeformation
 initialDeformationFromGrid(openvdb::Vec3SGrid::ConstPtr grid, const UnitBoxPlacement& placement,
-                           int dim, const std::string& what)
+                           int dim, const std::string& what, InitPlacement mode)
 {
     auto field = std::make_shared<const DeformationField>(grid); // checks the transform
     if (field->dimension() != dim) {
@@ -101,7 +101,7 @@ initialDeformationFromGrid(openvdb::Vec3SGrid::ConstPtr grid, const UnitBoxPlace
     bool same = std::abs(gridScale - placement.scale) <= PLACEMENT_TOLERANCE * placement.scale;
     for (int a = 0; a < dim; ++a)
         same = same && std::abs(gridOrigin[a] - placement.worldOrigin[a]) <= worldTolerance;
-    if (!same) {
+    if (!same && mode == InitPlacement::Same) {
         std::ostringstream s;
         s << what << " was computed for another placement of the shapes in the unit box (scale "
           << gridScale << ", origin " << gridOrigin << "; these inputs: scale " << placement.scale
@@ -135,6 +135,8 @@ initialDeformationFromGrid(openvdb::Vec3SGrid::ConstPtr grid, const UnitBoxPlace
     start->lipschitz = gridLipschitzBound(*grid, dim);
     start->description = what;
     const UnitBoxPlacement p = placement;
+    // Same placement: the grid's nodes are Omega's. Carried: phi(x') - x' at the world point x'
+    // of x, in the current Omega units (0 where x' is outside the earlier Omega).
     start->displacement = [field, p](const openvdb::Vec3d& xUnit) {
         return field->displacement(p.toWorld(xUnit)) * p.scale;
     };
@@ -143,10 +145,12 @@ initialDeformationFromGrid(openvdb::Vec3SGrid::ConstPtr grid, const UnitBoxPlace
 }
 
 InitialDeformation
-readInitialDeformation(const std::string& path, const UnitBoxPlacement& placement, int dim)
+readInitialDeformation(const std::string& path, const UnitBoxPlacement& placement, int dim,
+                       InitPlacement mode)
 {
-    return initialDeformationFromGrid(readDeformation(path), placement, dim,
-                                      "--init '" + path + "'");
+    return initialDeformationFromGrid(
+        readDeformation(path), placement, dim,
+        (mode == InitPlacement::Same ? "--init '" : "--warm-start '") + path + "'", mode);
 }
 
 } // namespace vdbmatch

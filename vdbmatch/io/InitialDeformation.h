@@ -10,6 +10,14 @@
 /// give the same placement, else the earlier phi would be read in another frame: the check
 /// compares both to 1e-5 of a node spacing. The displacement at x in Omega is the exact Kuhn
 /// piecewise-linear interpolation of the grid (DeformationField), times s.
+///
+/// **Warm starts** (`vdb_match match --warm-start`, InitPlacement::Carried): the map of another
+/// pair, e.g. frames k-1 -> k of a sequence as the start of k -> k+1. phi is a map of world space
+/// (the identity outside the earlier Omega), so it is carried into the current placement as
+/// x -> s' (phi(x') - x') with x' the world point of x: exact wherever the current Omega lies in
+/// the earlier one, and Id beyond. D phi is unchanged by the change of placement (a similarity),
+/// so the Lipschitz bound carries over. match() sets the boundary nodes to 0 and checks the start
+/// for folds.
 /// @see paper sec:numerics
 #pragma once
 
@@ -23,7 +31,13 @@
 
 namespace vdbmatch {
 
-/// An earlier result read for --init.
+/// How the grid's placement must relate to the current inputs'.
+enum class InitPlacement {
+    Same,   ///< the same inputs (--init): the placements must agree
+    Carried ///< another pair (--warm-start): any placement, the map carried through world space
+};
+
+/// An earlier result read for --init or --warm-start.
 struct InitialDeformation
 {
     std::shared_ptr<const InitialDisplacement> start; ///< for MatchOptions::initial
@@ -42,13 +56,15 @@ struct InitialDeformation
 /// @throw openvdb::IoError as readDeformation
 /// @throw openvdb::ValueError if the grid is not a deformation grid of dimension @a dim on the
 ///        nodes of Omega, or its placement differs from @a placement (the message says which
-///        and how to fix it)
+///        and how to fix it; InitPlacement::Same only)
 InitialDeformation readInitialDeformation(const std::string& path,
-                                          const UnitBoxPlacement& placement, int dim);
+                                          const UnitBoxPlacement& placement, int dim,
+                                          InitPlacement mode = InitPlacement::Same);
 
 /// As readInitialDeformation, from a grid in memory; @a what names it in messages.
 InitialDeformation initialDeformationFromGrid(openvdb::Vec3SGrid::ConstPtr grid,
                                               const UnitBoxPlacement& placement, int dim,
-                                              const std::string& what);
+                                              const std::string& what,
+                                              InitPlacement mode = InitPlacement::Same);
 
 } // namespace vdbmatch
