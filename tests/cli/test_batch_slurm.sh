@@ -164,6 +164,40 @@ else
     fail "resubmission: exit $code, $(grep array "$SCRATCH/slurm/slurm/batch.sbatch"), $(cat "$SCRATCH/err" | tail -3)"
 fi
 
+# A warm-start sequence: a chain of array tasks (%1), each started from the one before, the
+# same results as the local executor's chain.
+for k in 1 2 3 4; do
+    awk -v f="$k" '/^#/ || NF == 0 {print; next} {printf "%.6f %.6f\n", $1 * (1 + 0.04 * f), $2 * (1 - 0.02 * f)}' \
+        "$S/a.polyline" >"$S/seq.000$k.polyline"
+done
+WARM_THREADS=()
+[ "$CPUS" -lt 2 ] && WARM_THREADS=(--threads-per-job 1)
+"$VDB_MATCH" batch --sequence "$S/seq.####.polyline" --frames 1-4 --warm-start -o "$SCRATCH/warm_local" --quiet -- --levels 4..6 >/dev/null ||
+    fail "warm-start sequence, local"
+"$VDB_MATCH" batch --sequence "$S/seq.####.polyline" --frames 1-4 --warm-start -o "$SCRATCH/warm_slurm" --executor slurm --wait \
+    "${WARM_THREADS[@]}" -- --levels 4..6 >"$SCRATCH/out" 2>"$SCRATCH/err"
+code=$?
+"$VDB_MATCH" batch status "$SCRATCH/warm_slurm" >/dev/null 2>&1
+result=$("$PYTHON" - "$SCRATCH/warm_local" "$SCRATCH/warm_slurm" <<'PY'
+import json, sys
+a, b = sys.argv[1], sys.argv[2]
+pa, pb = json.load(open(a + "/plan.json")), json.load(open(b + "/plan.json"))
+problems = []
+if [j["warmStarted"] for j in pb["jobs"]] != [False, True, True]:
+    problems.append("warmStarted %s" % [j["warmStarted"] for j in pb["jobs"]])
+for j in pa["jobs"]:
+    ea = json.load(open(f"{a}/jobs/{j['name']}/report.json"))["result"]["energy"]
+    eb = json.load(open(f"{b}/jobs/{j['name']}/report.json"))["result"]["energy"]
+    if ea != eb: problems.append(f"{j['name']}: energy {ea} != {eb}")
+print("ok" if not problems else "; ".join(problems))
+PY
+)
+if [ $code -eq 0 ] && grep -q '^#SBATCH --array=0,1,2%1$' "$SCRATCH/warm_slurm/slurm/batch.sbatch" && [ "$result" = ok ]; then
+    ok "warm-start sequence: a %1 chain, each task from the one before, the local chain's energies"
+else
+    fail "warm-start sequence on slurm: exit $code, $(grep array "$SCRATCH/warm_slurm/slurm/batch.sbatch"), $result, $(tail -3 "$SCRATCH/err")"
+fi
+
 # A Slurm that refuses: an impossible memory request.
 "$VDB_MATCH" batch --all-pairs "$S/a.polyline" "$S/b.polyline" -o "$SCRATCH/refused" --executor slurm \
     --memory-per-task 100000000 -- --levels 4..5 >"$SCRATCH/out" 2>"$SCRATCH/err"
