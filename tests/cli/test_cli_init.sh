@@ -115,13 +115,19 @@ diff = np.linalg.norm(pw - pa, axis=1).mean()
 assert moved > 0 and diff < 0.1 * moved, (diff, moved)
 print(diff, moved)
 PY
-# The default start level is the last minus one; the run is a normal match from there.
+# The default start level is 6, below the last; the run is a normal match from there.
 check warm-default-level 0 '' 'warm start from' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/w2" --levels 4..6 --warm-start "$SCRATCH/a/deformation.vdb" --no-inverse --no-jacobian --threads 2
 pycheck warm-default-level-report - "$SCRATCH/w2/report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 assert r["init"]["kind"] == "warm-start" and [l["level"] for l in r["levels"]] == [5, 6], r["levels"]
 assert r["status"] == "converged" and r["result"]["minJacobian"] > 0, r["status"]
+PY
+check warm-default-level-8 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/w3" --levels 4..8 --warm-start "$SCRATCH/a/deformation.vdb" --max-iterations 2 "${COMMON[@]}"
+pycheck warm-default-level-8-report - "$SCRATCH/w3/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert [l["level"] for l in r["levels"]] == [6, 7, 8] and r["parameters"]["minLevel"] == 4, r["levels"]
 PY
 check warm-and-init 1 '' '--init .* and --warm-start .* cannot be combined' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --init "$SCRATCH/a/deformation.vdb" --warm-start "$SCRATCH/a/deformation.vdb" "${COMMON[@]}"
 check warm-level-alone 1 '' '--warm-start-level needs --warm-start' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --warm-start-level 5 "${COMMON[@]}"

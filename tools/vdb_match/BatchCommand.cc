@@ -83,7 +83,7 @@ batchOptionTable()
          [](O& o, const std::string& v) { o.frames = v; }},
         {"--warm-start", nullptr, "Plan",
          "with --sequence: start each pair k -> k+1 from the map of k-1 -> k (match "
-         "--warm-start, from the last level minus one); the jobs then run one after the other, "
+         "--warm-start, from level 6); the jobs then run one after the other, "
          "each with every core (docs/batch.md: when it helps)",
          [](O& o, const std::string&) { o.warmStart = true; }},
         {"--output,-o", "OUTDIR", "Output",
