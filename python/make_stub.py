@@ -62,6 +62,8 @@ def annotation(o):
         return "int | None"
     if o["metavar"] in FLOAT_METAVARS:
         return "float | None"
+    if o["name"] in ("--init", "--warm-start"):
+        return "MatchResult | str | os.PathLike[str] | None"
     return "str | os.PathLike[str] | None" if o["metavar"].endswith((".vdb", "FILE")) else "str | None"
 
 

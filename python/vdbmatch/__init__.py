@@ -197,6 +197,8 @@ def _arguments(command: str, parameters: dict, folder: str) -> list[str]:
                 raise TypeError(f"{key}: expected {opt['metavar']}, got {item!r}")
             if isinstance(item, np.ndarray) and key == "landmarks":
                 item = _write_points_csv(item, os.path.join(folder, f"landmarks{k}.csv"))
+            elif key in ("init", "warm_start") and isinstance(item, MatchResult):
+                item = os.path.join(item.folder, "deformation.vdb")
             elif isinstance(item, (float, np.floating)):
                 item = repr(float(item))
             elif isinstance(item, os.PathLike):

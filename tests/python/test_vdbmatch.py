@@ -140,6 +140,17 @@ def test_save_and_load_round_trip(tmp_path):
     assert voxels(loaded.displacement) == voxels(r.displacement)
 
 
+def test_a_match_warm_starts_from_another_result_object(tmp_path):
+    first = vdbmatch.match(FIGURE_A, FIGURE_B, progress=False, **QUICK_2D)
+    warm = vdbmatch.match(FIGURE_A, FIGURE_B, progress=False, warm_start=first, **QUICK_2D)
+    init = warm.report["init"]
+    assert init["kind"] == "warm-start" and init["path"] == os.path.join(first.folder, "deformation.vdb")
+    assert [lv["level"] for lv in warm.report["levels"]] == [5, 6]
+    run_cli([FIGURE_A, FIGURE_B, "-o", str(tmp_path / "cli"), "--levels", "4..6",
+             "--warm-start", os.path.join(first.folder, "deformation.vdb")])
+    assert warm.report["result"]["energy"] == vdbmatch.load(tmp_path / "cli").report["result"]["energy"]
+
+
 def test_progress_events_and_report():
     events = []
     r = vdbmatch.match(FIGURE_A, FIGURE_B, progress=events.append, levels="4..5")
