@@ -457,7 +457,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             lattice.expand(u);
             const Real minDet = minDeterminant<D>(lattice, u);
             if (!(minDet > 0) || !u.allFinite()) {
-                OPENVDB_THROW(openvdb::ValueError,
+                OPENVDB_THROW(InitialDeformationFolds,
                               "match: " << initial.description
                                         << " sampled at the nodes of the level " << lattice.level()
                                         << " lattice folds (min det D phi = " << minDet

@@ -40,6 +40,7 @@
 #include <vdbmatch/lattice/SimplexLattice.h>
 #include <vdbmatch/multiscale/MultiscaleDriver.h>
 
+#include <openvdb/Exceptions.h>
 #include <openvdb/util/NullInterrupter.h>
 
 #include <functional>
@@ -113,6 +114,15 @@ struct InitialDisplacement
     double lipschitz = 1;
     /// What it is, for messages ("--init 'out/deformation.vdb'").
     std::string description = "the initial deformation";
+};
+
+/// Thrown by match() when MatchOptions::initial, sampled at the nodes of the first lattice,
+/// folds (det D phi <= 0 on a simplex). A ValueError, so that callers that do not distinguish it
+/// see the same exception as before; a caller with a fallback (vdb_match match --warm-start
+/// starts from the identity instead) catches it alone.
+struct InitialDeformationFolds : public openvdb::ValueError
+{
+    using openvdb::ValueError::ValueError;
 };
 
 struct MatchOptions
@@ -227,7 +237,8 @@ struct MatchObserver
 ///                        holds the last accepted iterate of the level that was running
 ///                        (isInterrupted()), or no lattice if no level had started
 /// @throw openvdb::ValueError for invalid options or shapes (checkSurface), if a placed
-///        shape leaves [0,1]^d, and if opts.initial sampled on the first lattice folds
+///        shape leaves [0,1]^d
+/// @throw InitialDeformationFolds if opts.initial sampled on the first lattice folds
 ///        (det D phi <= 0 on a simplex)
 template <int D>
 MatchResult<D> match(const Surface<D>& source, const Surface<D>& target,

@@ -121,6 +121,7 @@ pycheck warm-default-level-report - "$SCRATCH/w2/report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 assert r["init"]["kind"] == "warm-start" and [l["level"] for l in r["levels"]] == [5, 6], r["levels"]
+assert r["init"]["used"] is True and r["init"]["fallback"] is None, r["init"]
 assert r["status"] == "converged" and r["result"]["minJacobian"] > 0, r["status"]
 PY
 check warm-default-level-8 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/w3" --levels 4..8 --warm-start "$SCRATCH/a/deformation.vdb" --max-iterations 2 "${COMMON[@]}"
@@ -158,7 +159,18 @@ for i in range(n + 1):
 vdb.write(sys.argv[2], grids=[g], metadata=meta)
 PY
 check folds 3 '' 'sampled at the nodes of the level 6 lattice folds' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --init "$SCRATCH/folded.vdb" "${COMMON[@]}"
-check warm-folds 3 '' 'warm-start .* folds' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --levels 4..6 --warm-start "$SCRATCH/folded.vdb" "${COMMON[@]}"
+# A warm start that folds falls back to the identity at the requested levels, and says so.
+check warm-folds-falls-back 0 '' 'the warm start folds on the first lattice .*starting from the identity at levels 4\.\.6' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/wf" --levels 4..6 --warm-start "$SCRATCH/folded.vdb" --no-inverse --no-jacobian --threads 2
+pycheck warm-folds-report - "$SCRATCH/wf/report.json" "$SCRATCH/s/report.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+s = json.load(open(sys.argv[2]))
+i = r["init"]
+assert i["kind"] == "warm-start" and i["used"] is False and "folds" in i["fallback"], i
+assert [l["level"] for l in r["levels"]] == [4, 5, 6] and r["parameters"]["minLevel"] == 4, r["levels"]
+# the same run as from scratch
+assert r["result"]["energy"] == s["result"]["energy"], (r["result"]["energy"], s["result"]["energy"])
+PY
 count=$((count + 1))
 if [ -e "$SCRATCH/o/deformation.vdb" ] || [ -e "$SCRATCH/o/report.json" ]; then
     fail "refusals-write-nothing: a refused --init left outputs in OUTDIR"

@@ -435,6 +435,27 @@ lastErrorLine(const std::string& logPath)
     return last;
 }
 
+/// Whether a job's report says it started from a warm start (match --warm-start, and the start
+/// did not fold, which would have made it fall back to the identity).
+bool
+startedWarm(const Json& report)
+{
+    if (!report.contains("init") || !report["init"].is_object()) return false;
+    const Json& init = report["init"];
+    return init.value("kind", std::string()) == "warm-start" && init.value("used", true);
+}
+
+bool
+startedWarm(const std::string& dir)
+{
+    std::ifstream f(fs::path(dir) / "report.json");
+    try {
+        return startedWarm(Json::parse(f));
+    } catch (const Json::exception&) {
+        return false;
+    }
+}
+
 /// This program, to start the jobs with.
 std::string
 selfExecutable()
@@ -703,6 +724,7 @@ runPlan(const BatchCliOptions& o, Plan& plan, std::ostream& out, std::ostream& e
             if (job.exitCode == EXIT_OK && outputsVerified(dir, &why)) {
                 job.state = "done";
                 job.error.clear();
+                if (job.warmStarted) job.warmStarted = startedWarm(dir);
             } else if (job.exitCode == EXIT_INTERRUPTED || stopping) {
                 job.state = "interrupted";
                 job.error = "interrupted";
@@ -790,8 +812,7 @@ refreshSlurmStates(const std::string& outDir, Plan& p)
                 j.seconds =
                     r.at("seconds").value("match", 0.0) + r.at("seconds").value("write", 0.0);
                 j.peakMemoryMB = r.value("peakMemoryMB", 0.0);
-                j.warmStarted = report.contains("init") && report["init"].is_object() &&
-                                report["init"].value("kind", std::string()) == "warm-start";
+                j.warmStarted = startedWarm(report);
             } catch (const Json::exception&) {
             }
         } else {

@@ -147,7 +147,8 @@ matchOptionTable()
         {"--warm-start", "DEFORMATION.vdb", "Input and output",
          "start from the map of another pair (its deformation.vdb), e.g. frames k-1 -> k of a "
          "sequence for k -> k+1: carried through world space into this pair's placement, it is "
-         "phi at the start of --warm-start-level (docs/batch.md says when it helps)",
+         "phi at the start of --warm-start-level (docs/batch.md says when it helps); a start that "
+         "folds there falls back to the identity",
          [](O& o, const std::string& v) { o.warmStart = v; }},
         {"--warm-start-level", "L", "Input and output",
          "the level whose descent starts from --warm-start; the levels before it are skipped "
@@ -612,7 +613,8 @@ template <int D>
 std::string
 reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)[2],
            const MatchResult<D>& r, const std::string& status, double writeSeconds,
-           const ExtraOutputs& extra, const InitialDeformation* init)
+           const ExtraOutputs& extra, const InitialDeformation* init,
+           const std::string& warmFallback)
 {
     const EnergyParameters& p = opts.multiscale.energy;
     const solver::DescentOptions& descent = opts.multiscale.descent;
@@ -631,6 +633,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
         j["init"] = Json{
             {"path", o.init.empty() ? o.warmStart : o.init},
             {"kind", o.init.empty() ? "warm-start" : "init"},
+            {"used", warmFallback.empty()},
+            {"fallback", warmFallback.empty() ? Json() : Json(warmFallback)},
             {"levels", std::to_string(init->firstLevel) + ".." + std::to_string(init->finestLevel)},
             {"gridLevel", init->gridLevel},
             {"interrupted", init->interrupted},
@@ -861,9 +865,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     const int firstSurfaceLevel = opts.multiscale.surfaceTolerance > 0
                                       ? opts.multiscale.maxLevel - opts.multiscale.surfaceLevels + 1
                                       : opts.multiscale.maxLevel + 1;
-    ProgressPrinter progress(err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel,
-                             firstSurfaceLevel);
-    progress.message(
+    auto progress = std::make_unique<ProgressPrinter>(err, o, D, opts.multiscale.minLevel,
+                                                      opts.multiscale.maxLevel, firstSurfaceLevel);
+    progress->message(
         "matching " + in[0].path + " -> " + in[1].path + " (" + std::to_string(D) + "D, " +
         (o.preset == "paper" ? "preset paper, " : "") + toString(opts.multiscale.kind) +
         " energy, levels " + std::to_string(opts.multiscale.minLevel) + ".." +
@@ -876,13 +880,34 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         (init && !o.warmStart.empty() ? ", warm start from " + o.warmStart : std::string()) + ")");
     MatchObserver observer;
     observer.levelStart = [&](const LevelSummary& s) {
-        progress.levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
+        progress->levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
     };
-    observer.iteration = [&](const solver::IterationInfo& i) { progress.iteration(i); };
-    observer.levelEnd = [&](const LevelSummary& s) { progress.levelEnd(s); };
+    observer.iteration = [&](const solver::IterationInfo& i) { progress->iteration(i); };
+    observer.levelEnd = [&](const LevelSummary& s) { progress->levelEnd(s); };
 
     SignalInterrupter interrupter;
-    const MatchResult<D> result = match<D>(source, target, placement, opts, observer, &interrupter);
+    // A warm start that folds on the new lattice (another pair's map: possible where the shapes
+    // moved much, or a fine map sampled on coarser cells) falls back to the identity at the
+    // requested levels; --init, an earlier result of the same pair, is refused instead.
+    std::string warmFallback;
+    const MatchResult<D> result = [&]() {
+        try {
+            return match<D>(source, target, placement, opts, observer, &interrupter);
+        } catch (const InitialDeformationFolds& e) {
+            if (o.warmStart.empty()) throw;
+            warmFallback = oneLine(e.what());
+            opts.multiscale.minLevel = opts.coarsestLevel;
+            opts.coarsestLevel = 0;
+            opts.initial.reset();
+            progress = std::make_unique<ProgressPrinter>(
+                err, o, D, opts.multiscale.minLevel, opts.multiscale.maxLevel, firstSurfaceLevel);
+            progress->message("the warm start folds on the first lattice (" + warmFallback +
+                              "); starting from the identity at levels " +
+                              std::to_string(opts.multiscale.minLevel) + ".." +
+                              std::to_string(opts.multiscale.maxLevel));
+            return match<D>(source, target, placement, opts, observer, &interrupter);
+        }
+    }();
     const bool interrupted = result.isInterrupted() || wasSignalled();
     if (!result.lattice) {
         // Stopped before the first level had a lattice: nothing to write.
@@ -891,7 +916,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
 
     // Everything is computed in memory first, then written file by file (each atomically).
     const Clock::time_point writeStart = Clock::now();
-    progress.message("writing " + o.outDir);
+    progress->message("writing " + o.outDir);
     const solver::Report& last = result.levels.back().report;
     openvdb::Vec3SGrid::Ptr deformation =
         makeDeformationGrid<D>(*result.lattice, result.displacement, placement, o.deformationLevel);
@@ -906,7 +931,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
             ".." + std::to_string(result.lattice->level())));
     if (init && !o.init.empty())
         deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
-    if (init && !o.warmStart.empty())
+    if (init && !o.warmStart.empty() && warmFallback.empty())
         deformation->insertMeta("vdbmatch_warm_start", openvdb::StringMetadata(o.warmStart));
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
@@ -952,8 +977,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (!interrupted && (o.writeInverse || o.writeJacobian)) {
         const DeformationField field(deformation);
         if (o.writeInverse) {
-            progress.message("computing the exact inverse at " +
-                             std::to_string(deformation->activeVoxelCount()) + " nodes");
+            progress->message("computing the exact inverse at " +
+                              std::to_string(deformation->activeVoxelCount()) + " nodes");
             const Clock::time_point t0 = Clock::now();
             const InverseGridResult inv = makeInverseGrid(field, true, &interrupter);
             if (inv.grid) {
@@ -967,9 +992,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                 inverseGrid->insertMeta("vdbmatch_inverse_max_residual",
                                         openvdb::DoubleMetadata(inv.maxResidual));
                 if (inv.failures) {
-                    progress.message("warning: the inverse walk failed at " +
-                                     std::to_string(inv.failures) +
-                                     " nodes (det D phi <= 0); inverse.vdb is wrong there");
+                    progress->message("warning: the inverse walk failed at " +
+                                      std::to_string(inv.failures) +
+                                      " nodes (det D phi <= 0); inverse.vdb is wrong there");
                 }
             }
         }
@@ -998,10 +1023,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
             if (minDet > 0) {
                 grid->setSaveFloatAsHalf(true);
             } else {
-                progress.message(std::string("warning: --half would fold ") +
-                                 (grid == deformation ? "deformation.vdb" : "inverse.vdb") +
-                                 " (min det D " + fixed("%.3g", minDet) +
-                                 " after rounding): written in float");
+                progress->message(std::string("warning: --half would fold ") +
+                                  (grid == deformation ? "deformation.vdb" : "inverse.vdb") +
+                                  " (min det D " + fixed("%.3g", minDet) +
+                                  " after rounding): written in float");
                 extra.halfRefused.push_back(grid == deformation ? "deformation.vdb"
                                                                 : "inverse.vdb");
             }
@@ -1036,8 +1061,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                : converged ? "converged"
                                            : "not converged";
     const double writeSeconds = secondsSince(writeStart);
-    const std::string report =
-        reportJson<D>(o, opts, in, result, status, writeSeconds, extra, init ? &*init : nullptr);
+    const std::string report = reportJson<D>(o, opts, in, result, status, writeSeconds, extra,
+                                             init ? &*init : nullptr, warmFallback);
     writeFileAtomically((fs::path(dir) / "report.json").string(),
                         [&](std::ostream& os) { os << report; });
 
