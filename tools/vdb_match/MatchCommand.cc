@@ -896,6 +896,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         } catch (const InitialDeformationFolds& e) {
             if (o.warmStart.empty()) throw;
             warmFallback = oneLine(e.what());
+            // The library's advice is for --init (start from a coarser result); not needed here.
+            warmFallback = warmFallback.substr(0, warmFallback.find("; start from"));
             opts.multiscale.minLevel = opts.coarsestLevel;
             opts.coarsestLevel = 0;
             opts.initial.reset();
