@@ -9,6 +9,9 @@ whole creature drifts by (0.12, 0.06, 0) per unit time, so that the pairs of fra
 differently in the unit box. Every frame is the first frame's mesh moved (same vertex order and
 connectivity), so vertex i of frame k corresponds to vertex i of every other frame.
 
+--motion arm-up: instead, the large articulated motion of make_pairs.creature_arm_up (arm 0
+raised 100 deg about its joint, no drift) in equal steps; its last frame is that pair's target.
+
 Checks, as make_pairs.py: det Dg > 0 (central differences) on the vertices and on a grid around
 the shape for the motion to the last frame; every frame closed, outward and free of
 self-intersections.
@@ -17,7 +20,8 @@ Output: OUTDIR/frame.####.obj (k = 1..N) and OUTDIR/sequence.json (description, 
 step and in all as fractions of the first frame's bounding-box diagonal).
 
 Usage (system python, which has numpy and pyopenvdb):
-    /usr/bin/python3 bench/accuracy/make_sequence.py OUTDIR [--frames N]   (default 9)
+    /usr/bin/python3 bench/accuracy/make_sequence.py OUTDIR [--frames N] [--motion limbs|arm-up]
+    (default 9 frames, limbs)
 Deterministic.
 """
 
@@ -34,25 +38,37 @@ import make_pairs as mp  # noqa: E402
 
 DRIFT = np.array([0.12, 0.06, 0.0])   # world units per unit time
 LIMBS = ((0, "up", 75.0), (2, "down", 55.0), (3, "swing", 45.0))
+# --motion arm-up: make_pairs.creature_arm_up (arm 0 raised 100 deg, no drift) in steps, the
+# large articulated motion that a single match does not follow
+ARM_UP = ((0, "up", 100.0),)
 
 
-def motion_until(t_end):
+def motion_until(t_end, limbs=LIMBS, drift=DRIFT):
     """g_t: the creature's motion from the first frame to time t_end in [0, 1]."""
     maps = []
-    for i, kind, degrees in LIMBS:
+    for i, kind, degrees in limbs:
         d = mp.arm(i)
         axis = mp.UP if kind == "swing" else np.cross(d, mp.UP) * (1.0 if kind == "up" else -1.0)
         maps.append(mp.limb_rotation(0.33 * d, d, degrees, start=0.45 - 0.33, ramp=0.05,
                                      lateral=mp.window(0.26), axis=axis, plane_normal=mp.UP,
                                      t_end=t_end))
-    maps.append(lambda x: x + t_end * DRIFT)
+    maps.append(lambda x: x + t_end * drift)
     return mp.compose(*maps)
 
 
 def main():
     args = sys.argv[1:]
-    usage = "usage: make_sequence.py OUTDIR [--frames N]"
+    usage = "usage: make_sequence.py OUTDIR [--frames N] [--motion limbs|arm-up]"
     frames = 9
+    limbs, drift, motion = LIMBS, DRIFT, "limbs"
+    if "--motion" in args:
+        at = args.index("--motion")
+        if at + 1 >= len(args) or args[at + 1] not in ("limbs", "arm-up"):
+            sys.exit(usage)
+        motion = args[at + 1]
+        if motion == "arm-up":
+            limbs, drift = ARM_UP, np.zeros(3)
+        del args[at:at + 2]
     if "--frames" in args:
         at = args.index("--frames")
         try:
@@ -68,7 +84,7 @@ def main():
     points, tris = mp.creature_mesh()
     points = np.round(points, mp.DECIMALS)
     mp.check_closed_oriented(points, tris, "creature")
-    g_last = motion_until(1.0)
+    g_last = motion_until(1.0, limbs, drift)
     det_vertices = mp.min_jacobian(g_last, points)
     det_grid = mp.min_jacobian(g_last, mp.probe_grid(points, mp.JACOBIAN_GRID[0]))
     if not (det_vertices > 0.0 and det_grid > 0.0):
@@ -79,7 +95,7 @@ def main():
     steps = []
     for k in range(1, frames + 1):
         t = (k - 1) / (frames - 1)
-        frame = np.round(motion_until(t)(points), mp.DECIMALS) if k > 1 else points
+        frame = np.round(motion_until(t, limbs, drift)(points), mp.DECIMALS) if k > 1 else points
         name = "frame k=%d" % k
         mp.check_closed_oriented(frame, tris, name)
         crossings, _ = mp.self_intersections(frame, tris)
@@ -94,8 +110,10 @@ def main():
         previous = frame
     total = np.linalg.norm(previous - points, axis=1)
     info = {
-        "description": "creature: arm 0 up 75 deg, arm 2 down 55 deg, arm 3 swung 45 deg, drift "
-                       "(0.12, 0.06, 0), over frames 1..%d at equal time steps" % frames,
+        "description": ("creature: arm 0 up 75 deg, arm 2 down 55 deg, arm 3 swung 45 deg, drift "
+                        "(0.12, 0.06, 0)" if motion == "limbs" else
+                        "creature: arm 0 raised 100 deg (make_pairs creature_arm_up)")
+                       + ", over frames 1..%d at equal time steps" % frames,
         "frames": frames,
         "vertices": int(len(points)),
         "firstFrameBoxDiagonal": diag,
