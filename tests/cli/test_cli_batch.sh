@@ -180,6 +180,20 @@ print("ok" if not problems else "; ".join(problems))
 PY
 )
 [ "$result" = ok ] && echo "ok   sequence --warm-start: a chain in plan.json, the reports and jobs.txt" || fail "$result"
+# jobs.txt's line of a warm job runs from the identity when its predecessor left no map.
+cp -r "$SCRATCH/warmout" "$SCRATCH/warmcopy"
+rm "$SCRATCH/warmcopy/jobs/fig.0001--fig.0002/deformation.vdb"
+sed -n 2p "$SCRATCH/warmout/jobs.txt" | sed "s#$SCRATCH/warmout#$SCRATCH/warmcopy#g" >"$SCRATCH/line2.sh"
+count=$((count + 1))
+if bash "$SCRATCH/line2.sh" && "$PYTHON" -c "
+import json, sys
+r = json.load(open(sys.argv[1]))
+sys.exit(0 if r['init'] is None and [l['level'] for l in r['levels']] == [4, 5, 6] else 1)" \
+    "$SCRATCH/warmcopy/jobs/fig.0002--fig.0003/report.json"; then
+    echo "ok   jobs.txt: a warm job without its predecessor's map runs from the identity"
+else
+    fail "jobs.txt warm line without the predecessor's map"
+fi
 check "warm-start status" 0 'fig.0002--fig.0003  done .*\(warm start\)' '' -- batch status "$SCRATCH/warmout"
 check "warm-start collect" 0 '3 of 3 jobs done' '' -- batch collect "$SCRATCH/warmout" --quiet
 expect "warm-start: the sequence collected" test -s "$SCRATCH/warmout/sequence/deformed.0004.obj"
