@@ -237,7 +237,10 @@ def test_ctrl_c_raises_keyboard_interrupt_promptly_and_leaves_nothing():
         vdbmatch.match(SPHERE, ELLIPSOID, progress=progress, levels="4..7", threads=1)
     latency = time.monotonic() - sent["t"]
     t.join()
-    assert latency < 5.0, f"KeyboardInterrupt came {latency:.1f} s after SIGINT"
+    # The whole match takes ~40 s on one idle thread; a few seconds are enough when the machine
+    # is idle, but the bound leaves room for a loaded one (ctest -j2 next to other work: 5 s
+    # was exceeded once there).
+    assert latency < 10.0, f"KeyboardInterrupt came {latency:.1f} s after SIGINT"
     assert vdbmatch_temp_folders() == before
     # Python's own handler is back: a second SIGINT raises KeyboardInterrupt in Python.
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
