@@ -461,8 +461,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                               "match: " << initial.description
                                         << " sampled at the nodes of the level " << lattice.level()
                                         << " lattice folds (min det D phi = " << minDet
-                                        << " <= 0); start from a result whose finest level is "
-                                           "below the first level of this run");
+                                        << " <= 0)");
             }
             return u;
         };

@@ -14,6 +14,7 @@
 
 #include <numeric>
 #include <string>
+#include <type_traits>
 
 using namespace vdbmatch;
 using test::ellipseCurve;
@@ -47,16 +48,28 @@ struct InitialDeformationTest : public ::testing::Test
     void SetUp() override { openvdb::initialize(); }
     const Surface<2> circle = ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
     const Surface<2> ellipse = ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
+
+    /// The 2D defaults at levels first..last.
+    static MatchOptions levels(int first, int last)
+    {
+        MatchOptions opts = MatchOptions::defaults(2);
+        opts.multiscale.minLevel = first;
+        opts.multiscale.maxLevel = last;
+        return opts;
+    }
+    /// circle -> ellipse at levels first..last.
+    MatchResult<2> matched(int first, int last) const
+    {
+        return match<2>(circle, ellipse, placement, levels(first, last));
+    }
 };
 
 } // namespace
 
 TEST_F(InitialDeformationTest, ContinuesACoarserResult2D)
 {
-    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.multiscale.minLevel = 4;
-    opts.multiscale.maxLevel = 7;
+    MatchOptions opts = levels(4, 7);
     const MatchResult<2> scratch = match<2>(circle, ellipse, placement, opts);
     ASSERT_TRUE(scratch.isComplete());
 
@@ -105,10 +118,7 @@ TEST_F(InitialDeformationTest, ContinuesACoarserResult2D)
 TEST_F(InitialDeformationTest, ResumesAtTheLastLevel)
 {
     // A result as fine as the requested last level: that level runs again from it.
-    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.multiscale.minLevel = 4;
-    opts.multiscale.maxLevel = 5;
+    MatchOptions opts = levels(4, 5);
     const MatchResult<2> first = match<2>(circle, ellipse, placement, opts);
     ASSERT_TRUE(first.isComplete());
     const InitialDeformation init =
@@ -127,11 +137,7 @@ TEST_F(InitialDeformationTest, ResumesAtTheLastLevel)
 
 TEST_F(InitialDeformationTest, RefusesAnotherPlacementOrDimension)
 {
-    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.multiscale.minLevel = 3;
-    opts.multiscale.maxLevel = 4;
-    const MatchResult<2> r = match<2>(circle, ellipse, placement, opts);
+    const MatchResult<2> r = matched(3, 4);
     const openvdb::Vec3SGrid::Ptr grid = resultGrid(r, 3);
 
     const UnitBoxPlacement otherMargin = placeInUnitBox<2>(circle, ellipse, 0.1);
@@ -156,11 +162,7 @@ TEST_F(InitialDeformationTest, CarriesAnotherPairsMapThroughWorldSpace)
     // --warm-start: the grid of one placement read for another (other margin, other shapes):
     // accepted, and u at a point of the new Omega is the world displacement of the old phi at
     // that world point, in the new Omega units; 0 where the world point is outside the old Omega.
-    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.multiscale.minLevel = 3;
-    opts.multiscale.maxLevel = 5;
-    const MatchResult<2> r = match<2>(circle, ellipse, placement, opts);
+    const MatchResult<2> r = matched(3, 5);
     ASSERT_TRUE(r.isComplete());
     const openvdb::Vec3SGrid::Ptr grid = resultGrid(r, 3);
     const DeformationField field(grid);
@@ -195,10 +197,8 @@ TEST_F(InitialDeformationTest, CarriesAnotherPairsMapThroughWorldSpace)
                      initialDeformationFromGrid(grid, placement, 2, "x").start->lipschitz);
 
     // A match of the other pair started from it runs and stays invertible.
-    MatchOptions warm = MatchOptions::defaults(2);
+    MatchOptions warm = levels(4, 5);
     warm.coarsestLevel = 3;
-    warm.multiscale.minLevel = 4;
-    warm.multiscale.maxLevel = 5;
     warm.initial = init.start;
     const MatchResult<2> w = match<2>(moved, ellipse, other, warm);
     ASSERT_TRUE(w.isComplete());
@@ -210,11 +210,7 @@ TEST_F(InitialDeformationTest, RefusesAFold)
 {
     // A grid whose phi mirrors x in the middle of Omega: det D phi < 0 there, so it folds on
     // any lattice it is sampled on.
-    const UnitBoxPlacement placement = placeInUnitBox<2>(circle, ellipse, DEFAULT_UNIT_BOX_MARGIN);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.multiscale.minLevel = 3;
-    opts.multiscale.maxLevel = 3;
-    const MatchResult<2> r = match<2>(circle, ellipse, placement, opts);
+    const MatchResult<2> r = matched(3, 3);
     NodeVectors<2> u = NodeVectors<2>::Zero(2, Eigen::Index(r.lattice->nodeCount()));
     for (std::size_t i = 0; i < r.lattice->nodeCount(); ++i) {
         const Vec<2> x = r.lattice->nodePosition(i);
@@ -224,14 +220,14 @@ TEST_F(InitialDeformationTest, RefusesAFold)
     const openvdb::Vec3SGrid::Ptr grid = makeDeformationGrid<2>(*r.lattice, u, placement);
     const InitialDeformation init =
         initialDeformationFromGrid(grid, placement, 2, "the folded grid");
-    opts.multiscale.minLevel = 4;
-    opts.multiscale.maxLevel = 4;
+    MatchOptions opts = levels(4, 4);
     opts.coarsestLevel = 3;
     opts.initial = init.start;
     try {
         match<2>(circle, ellipse, placement, opts);
         FAIL() << "expected a fold error";
-    } catch (const openvdb::ValueError& e) {
+    } catch (const InitialDeformationFolds& e) { // vdb_match --warm-start tells it apart
+        static_assert(std::is_base_of_v<openvdb::ValueError, InitialDeformationFolds>);
         EXPECT_NE(std::string(e.what()).find("the folded grid sampled at the nodes of the level 4 "
                                              "lattice folds"),
                   std::string::npos)

@@ -632,7 +632,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     if (init) {
         j["init"] = Json{
             {"path", o.init.empty() ? o.warmStart : o.init},
-            {"kind", o.init.empty() ? "warm-start" : "init"},
+            {"kind", o.warmStart.empty() ? "init" : "warm-start"},
             {"used", warmFallback.empty()},
             {"fallback", warmFallback.empty() ? Json() : Json(warmFallback)},
             {"levels", std::to_string(init->firstLevel) + ".." + std::to_string(init->finestLevel)},
@@ -824,30 +824,27 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     }
 
     // --init: an earlier result of these inputs; the run starts after its finest level (or at
-    // the last requested one), with cells no coarser than those of the requested first level.
+    // the last requested one). --warm-start: another pair's map, carried through world space;
+    // the run starts at --warm-start-level. Either way the cells stay no coarser than those of
+    // the requested first level.
+    const bool warm = !o.warmStart.empty();
+    const std::string& initPath = warm ? o.warmStart : o.init;
     std::optional<InitialDeformation> init;
-    if (!o.init.empty()) {
-        if (!o.quiet) err << PROGRAM << ": reading " << o.init << std::endl;
-        init = readInitialDeformation(o.init, placement, D);
+    if (!initPath.empty()) {
+        if (!o.quiet) err << PROGRAM << ": reading " << initPath << std::endl;
+        init = readInitialDeformation(initPath, placement, D,
+                                      warm ? InitPlacement::Carried : InitPlacement::Same);
         const int firstRequested = opts.multiscale.minLevel;
-        opts.coarsestLevel = firstRequested;
-        opts.multiscale.minLevel =
-            std::max(firstRequested, std::min(init->nextLevel(), opts.multiscale.maxLevel));
-        opts.initial = init->start;
-        opts.validate(D);
-        checkInterrupted();
-    } else if (!o.warmStart.empty()) {
-        if (!o.quiet) err << PROGRAM << ": reading " << o.warmStart << std::endl;
-        init = readInitialDeformation(o.warmStart, placement, D, InitPlacement::Carried);
-        const int firstRequested = opts.multiscale.minLevel;
+        const int lastRequested = opts.multiscale.maxLevel;
         const int startLevel =
-            o.warmStartLevel ? *o.warmStartLevel
-                             : std::max(firstRequested, std::min(DEFAULT_WARM_START_LEVEL,
-                                                                 opts.multiscale.maxLevel - 1));
-        if (startLevel < firstRequested || startLevel > opts.multiscale.maxLevel) {
+            !warm ? std::max(firstRequested, std::min(init->nextLevel(), lastRequested))
+            : o.warmStartLevel
+                ? *o.warmStartLevel
+                : std::max(firstRequested, std::min(DEFAULT_WARM_START_LEVEL, lastRequested - 1));
+        if (startLevel < firstRequested || startLevel > lastRequested) {
             throw UsageError("--warm-start-level " + std::to_string(startLevel) +
                              " is outside the levels " + std::to_string(firstRequested) + ".." +
-                             std::to_string(opts.multiscale.maxLevel));
+                             std::to_string(lastRequested));
         }
         opts.coarsestLevel = firstRequested;
         opts.multiscale.minLevel = startLevel;
@@ -872,12 +869,12 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         (o.preset == "paper" ? "preset paper, " : "") + toString(opts.multiscale.kind) +
         " energy, levels " + std::to_string(opts.multiscale.minLevel) + ".." +
         std::to_string(opts.multiscale.maxLevel) +
-        (init && !o.init.empty()
-             ? ", from " + o.init + " (levels " + std::to_string(init->firstLevel) + ".." +
-                   std::to_string(init->finestLevel) + (init->interrupted ? ", interrupted" : "") +
-                   ")"
-             : std::string()) +
-        (init && !o.warmStart.empty() ? ", warm start from " + o.warmStart : std::string()) + ")");
+        (!init  ? std::string()
+         : warm ? ", warm start from " + o.warmStart
+                : ", from " + o.init + " (levels " + std::to_string(init->firstLevel) + ".." +
+                      std::to_string(init->finestLevel) +
+                      (init->interrupted ? ", interrupted" : "") + ")") +
+        ")");
     MatchObserver observer;
     observer.levelStart = [&](const LevelSummary& s) {
         progress->levelStart(s.level, s.lattice, s.fieldSeconds, s.latticeSeconds);
@@ -886,18 +883,20 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     observer.levelEnd = [&](const LevelSummary& s) { progress->levelEnd(s); };
 
     SignalInterrupter interrupter;
-    // A warm start that folds on the new lattice (another pair's map: possible where the shapes
-    // moved much, or a fine map sampled on coarser cells) falls back to the identity at the
-    // requested levels; --init, an earlier result of the same pair, is refused instead.
+    // A start that folds on the new lattice: --init, an earlier result of the same pair, is
+    // refused (a finer result sampled on coarser cells); a warm start (another pair's map:
+    // possible where the shapes moved much) falls back to the identity at the requested levels.
     std::string warmFallback;
     const MatchResult<D> result = [&]() {
         try {
             return match<D>(source, target, placement, opts, observer, &interrupter);
         } catch (const InitialDeformationFolds& e) {
-            if (o.warmStart.empty()) throw;
+            if (!warm) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              oneLine(e.what()) << "; start from a result whose finest level is "
+                                                   "below the first level of this run");
+            }
             warmFallback = oneLine(e.what());
-            // The library's advice is for --init (start from a coarser result); not needed here.
-            warmFallback = warmFallback.substr(0, warmFallback.find("; start from"));
             opts.multiscale.minLevel = opts.coarsestLevel;
             opts.coarsestLevel = 0;
             opts.initial.reset();
@@ -931,10 +930,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         openvdb::StringMetadata(
             std::to_string(opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel) +
             ".." + std::to_string(result.lattice->level())));
-    if (init && !o.init.empty())
-        deformation->insertMeta("vdbmatch_init", openvdb::StringMetadata(o.init));
-    if (init && !o.warmStart.empty() && warmFallback.empty())
-        deformation->insertMeta("vdbmatch_warm_start", openvdb::StringMetadata(o.warmStart));
+    if (init && warmFallback.empty()) {
+        deformation->insertMeta(warm ? "vdbmatch_warm_start" : "vdbmatch_init",
+                                openvdb::StringMetadata(initPath));
+    }
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
