@@ -7,8 +7,10 @@ ValueError / OSError / TypeError with the command's message; Ctrl-C raises Keybo
 promptly and leaves nothing behind; the GIL is released; the stub is up to date.
 """
 
+import atexit
 import glob
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -62,8 +64,16 @@ def run_cli(args):
     subprocess.run([VDB_MATCH] + args + ["--quiet"], check=True)
 
 
+# The library's workspaces are made with tempfile.mkdtemp(prefix="vdbmatch-"). The tests that
+# check nothing is left behind look in a temp root of their own: under ctest -j2 the CLI tests make
+# and remove their own /tmp/vdbmatch-* folders at the same time.
+PRIVATE_TMP = tempfile.mkdtemp(prefix="pytest-vdbmatch.")
+tempfile.tempdir = PRIVATE_TMP
+atexit.register(shutil.rmtree, PRIVATE_TMP, True)
+
+
 def vdbmatch_temp_folders():
-    return set(glob.glob(os.path.join(tempfile.gettempdir(), "vdbmatch-*")))
+    return set(glob.glob(os.path.join(PRIVATE_TMP, "vdbmatch-*")))
 
 
 def test_match_from_numpy_equals_cli_bit_for_bit(tmp_path):
