@@ -131,6 +131,7 @@ checkSwirlInverse(int dim)
     double worst = 0;
     int longestWalk = 0;
     std::vector<openvdb::Vec3d> points;
+    DeformationField::Cursor cursor(field);
     for (int k = 0; k < 3000; ++k) {
         openvdb::Vec3d y = box.min() + (box.max() - box.min()) *
                                            openvdb::Vec3d(uniform(rng), uniform(rng), uniform(rng));
@@ -140,6 +141,13 @@ checkSwirlInverse(int dim)
         ASSERT_TRUE(r.found);
         longestWalk = std::max(longestWalk, r.simplices);
         worst = std::max(worst, (field.apply(r.x) - y).length());
+        // The walk's own residual (its last simplex's affine map) is rounding too.
+        EXPECT_LT(r.residual, 1e-9 * voxel);
+        // A cursor (one accessor kept between queries) gives the same bits.
+        const DeformationField::InverseResult c = cursor.inverse(y);
+        EXPECT_EQ(c.x, r.x);
+        EXPECT_EQ(c.simplices, r.simplices);
+        EXPECT_EQ(cursor.apply(y), field.apply(y));
         worst = std::max(worst, (field.inverse(field.apply(y)).x - y).length());
     }
     EXPECT_LT(worst, 1e-5 * voxel);

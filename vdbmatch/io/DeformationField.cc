@@ -14,11 +14,7 @@
 
 namespace vdbmatch {
 
-namespace {
-
-using ConstAccessor = openvdb::tree::ValueAccessor<const openvdb::Vec3STree, /*IsSafe=*/false>;
-
-} // namespace
+using ConstAccessor = DeformationField::Accessor;
 
 DeformationField::DeformationField(openvdb::Vec3SGrid::ConstPtr grid) : mGrid(std::move(grid))
 {
@@ -97,11 +93,17 @@ DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices,
 openvdb::Vec3d
 DeformationField::displacement(const openvdb::Vec3d& xWorld) const
 {
+    ConstAccessor acc(mGrid->tree());
+    return displacement(xWorld, acc);
+}
+
+openvdb::Vec3d
+DeformationField::displacement(const openvdb::Vec3d& xWorld, ConstAccessor& acc) const
+{
     openvdb::Coord v[4];
     double w[4];
     int axes[3];
     locate(xWorld, v, w, axes);
-    ConstAccessor acc(mGrid->tree());
     openvdb::Vec3d u(0.0);
     for (int m = 0; m <= mDim; ++m) {
         if (w[m] == 0.0) continue;
@@ -179,27 +181,44 @@ DeformationField::cellDeterminants(int dimension, const openvdb::Vec3d* u, doubl
 DeformationField::InverseResult
 DeformationField::inverse(const openvdb::Vec3d& yWorld) const
 {
-    // Initial guess: two fixed-point iterates of x = y - u(x) (exact where u is locally
-    // constant, and the walk makes up for the rest).
-    openvdb::Vec3d x = yWorld - displacement(yWorld);
-    x = yWorld - displacement(x);
-    return inverse(yWorld, x);
+    ConstAccessor acc(mGrid->tree());
+    return inverse(yWorld, acc);
 }
 
 DeformationField::InverseResult
 DeformationField::inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld) const
 {
+    ConstAccessor acc(mGrid->tree());
+    return inverse(yWorld, guessWorld, acc);
+}
+
+DeformationField::InverseResult
+DeformationField::inverse(const openvdb::Vec3d& yWorld, ConstAccessor& acc) const
+{
+    // Initial guess: two fixed-point iterates of x = y - u(x) (exact where u is locally
+    // constant, and the walk makes up for the rest).
+    openvdb::Vec3d x = yWorld - displacement(yWorld, acc);
+    x = yWorld - displacement(x, acc);
+    return inverse(yWorld, x, acc);
+}
+
+DeformationField::InverseResult
+DeformationField::inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld,
+                          ConstAccessor& acc) const
+{
     const openvdb::math::Transform& xform = mGrid->transform();
     const openvdb::Vec3d yIndex = xform.worldToIndex(yWorld);
-    InverseResult r = inverseIndex(yIndex, xform.worldToIndex(guessWorld));
+    InverseResult r = inverseIndex(yIndex, xform.worldToIndex(guessWorld), acc);
     // As a displacement from y, so that phi^{-1}(y) = y exactly where phi = Id.
     r.x = yWorld + (r.x - yIndex) * mVoxelSize;
+    r.residual *= mVoxelSize;
     if (mDim == 2) r.x[2] = yWorld[2];
     return r;
 }
 
 DeformationField::InverseResult
-DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) const
+DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x,
+                               ConstAccessor& acc) const
 {
     // Nudge that picks the simplex the walk enters at a face (index units; coordinates are
     // below 2^13, whose spacing in double is ~1e-12).
@@ -209,7 +228,6 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
     constexpr int MAX_STEPS = 1 << 16;
     // Relative rate below which a barycentric coordinate counts as constant along the walk.
     constexpr double EXIT_TOLERANCE = 1e-10;
-    ConstAccessor acc(mGrid->tree());
     const double toIndex = 1.0 / mVoxelSize;
     openvdb::Vec3d y = yIn;
     if (mDim == 2) {
@@ -281,6 +299,7 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x) cons
             // edge, where the exit test sees rounding): the affine inverse of this simplex,
             // whose error is below |d| times the jump of D phi across the face.
             result.x = x + d;
+            result.residual = (q + A * d - y).length();
             return result;
         }
         hint = d / length;
@@ -310,13 +329,14 @@ DeformationField::mapPoints(openvdb::Vec3d* points, std::size_t count, bool inve
     std::atomic<std::size_t> failed{0};
     auto body = [&](const tbb::blocked_range<std::size_t>& range) {
         std::size_t bad = 0;
+        Cursor cursor(*this);
         for (std::size_t i = range.begin(); i != range.end(); ++i) {
             if (inverse) {
-                const InverseResult r = this->inverse(points[i]);
+                const InverseResult r = cursor.inverse(points[i]);
                 if (!r.found) ++bad;
                 points[i] = r.x;
             } else {
-                points[i] = apply(points[i]);
+                points[i] = cursor.apply(points[i]);
             }
         }
         failed += bad;

@@ -94,6 +94,11 @@ public:
         int simplices = 0; ///< simplices visited by the walk
         bool found = true; ///< false: the walk met a simplex with det D phi <= 0 or ran out
                            ///< of steps (x is then the last point reached)
+        /// |phi(x) - y| with phi the affine map of the simplex where the walk ended (world
+        /// units): rounding error only. (x can lie outside that simplex by the walk's nudge,
+        /// 1e-9 voxel, where the map of the next simplex differs by that times the jump of
+        /// D phi.) Computed at no cost, unlike a separate |apply(x) - y|.
+        double residual = 0;
     };
     /// Exact phi^{-1}(y) (file comment), starting from the guess @a guessWorld (the fixed point
     /// iterate x = y - u(x) if none is given). Outside Omega, phi^{-1}(y) = y.
@@ -109,7 +114,44 @@ public:
     std::size_t mapPoints(openvdb::Vec3d* pointsWorld, std::size_t count, bool inverse,
                           bool threaded = true) const;
 
+    /// Unregistered accessor of the displacement tree (one per thread; cheap to make).
+    using Accessor = openvdb::tree::ValueAccessor<const openvdb::Vec3STree, /*IsSafe=*/false>;
+
+    /// The queries above through an accessor kept between calls, for many nearby points on one
+    /// thread (the inverse grid, point sets): its cached tree path makes the lookups of
+    /// neighbouring points cheap. The same results as the field's own queries, bit for bit.
+    /// Not thread-safe; the field must outlive it.
+    class Cursor
+    {
+    public:
+        explicit Cursor(const DeformationField& field) : mField(&field), mAcc(field.grid().tree())
+        {
+        }
+        openvdb::Vec3d displacement(const openvdb::Vec3d& xWorld)
+        {
+            return mField->displacement(xWorld, mAcc);
+        }
+        openvdb::Vec3d apply(const openvdb::Vec3d& xWorld) { return xWorld + displacement(xWorld); }
+        InverseResult inverse(const openvdb::Vec3d& yWorld)
+        {
+            return mField->inverse(yWorld, mAcc);
+        }
+        InverseResult inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld)
+        {
+            return mField->inverse(yWorld, guessWorld, mAcc);
+        }
+
+    private:
+        const DeformationField* mField;
+        Accessor mAcc;
+    };
+
 private:
+    openvdb::Vec3d displacement(const openvdb::Vec3d& xWorld, Accessor& acc) const;
+    InverseResult inverse(const openvdb::Vec3d& yWorld, Accessor& acc) const;
+    InverseResult inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& guessWorld,
+                          Accessor& acc) const;
+
     /// Index position, cell origin and the containing simplex's path (vertices, weights).
     void locate(const openvdb::Vec3d& xWorld, openvdb::Coord* vertices, double* weights,
                 int* axes) const;
@@ -117,7 +159,7 @@ private:
     void locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
                      int* axes) const;
     /// The walk of inverse(), in index space.
-    InverseResult inverseIndex(const openvdb::Vec3d& y, openvdb::Vec3d x) const;
+    InverseResult inverseIndex(const openvdb::Vec3d& y, openvdb::Vec3d x, Accessor& acc) const;
 
     openvdb::Vec3SGrid::ConstPtr mGrid;
     int mDim = 3;

@@ -28,6 +28,7 @@ makeInverseGrid(const DeformationField& phi, bool threaded,
     std::vector<double> residual(count, 0.0);
     std::atomic<bool> stopped{false};
     auto body = [&](const tbb::blocked_range<std::size_t>& range) {
+        DeformationField::Cursor cursor(phi);
         for (std::size_t li = range.begin(); li != range.end(); ++li) {
             if (stopped.load(std::memory_order_relaxed)) return;
             if (interrupter && interrupter->wasInterrupted()) {
@@ -41,12 +42,12 @@ makeInverseGrid(const DeformationField& phi, bool threaded,
             for (auto v = leaf.beginValueOn(); v; ++v) {
                 const openvdb::Vec3d y = xform.indexToWorld(v.getCoord());
                 const DeformationField::InverseResult r =
-                    haveGuess ? phi.inverse(y, y + previous) : phi.inverse(y);
+                    haveGuess ? cursor.inverse(y, y + previous) : cursor.inverse(y);
                 previous = r.x - y;
                 haveGuess = true;
                 ++nodes[li];
                 if (!r.found) ++failures[li];
-                residual[li] = std::max(residual[li], (phi.apply(r.x) - y).length());
+                residual[li] = std::max(residual[li], r.residual);
                 v.setValue(openvdb::Vec3s(previous));
             }
         }

@@ -34,6 +34,7 @@ struct InverseGridResult
     std::size_t nodes = 0;        ///< nodes evaluated
     std::size_t failures = 0;     ///< nodes whose walk met det D phi <= 0 (value: last point)
     double maxResidual = 0;       ///< max |phi(phi^{-1}(y)) - y| over the nodes, world units
+                                  ///< (InverseResult::residual: in the walk's last simplex)
 };
 
 /// phi^{-1}(y) - y at every active voxel of @a phi's grid (file comment).

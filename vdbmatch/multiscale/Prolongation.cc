@@ -107,10 +107,14 @@ PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellA
             Vec<D> t;
             for (int a = 0; a < D; ++a)
                 t[a] = (p[a] - Real(cell.origin[a])) / side;
-            // Axes by decreasing t: the Kuhn path through the simplex containing t.
+            // Axes by decreasing t, ties in axis order: the Kuhn path through the simplex
+            // containing t. (Insertion sort: stable like std::stable_sort, which allocates a
+            // buffer at every call; the dense output grid calls this at every node.)
             std::array<int, D> order;
             std::iota(order.begin(), order.end(), 0);
-            std::stable_sort(order.begin(), order.end(), [&](int i, int j) { return t[i] > t[j]; });
+            for (int i = 1; i < D; ++i)
+                for (int j = i; j > 0 && t[order[j]] > t[order[j - 1]]; --j)
+                    std::swap(order[j], order[j - 1]);
             int mask = 0;
             loc.nodes[0] = cell.corners[0];
             loc.weights[0] = 1 - t[order[0]];

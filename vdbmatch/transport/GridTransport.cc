@@ -149,6 +149,7 @@ pullBack(const GridT& in, const DeformationField& phi, bool inverse, bool thread
     std::atomic<bool> stopped{false};
     auto body = [&](const tbb::blocked_range<std::size_t>& range) {
         typename GridT::ConstAccessor source = in.getConstAccessor();
+        DeformationField::Cursor map(phi);
         for (std::size_t li = range.begin(); li != range.end(); ++li) {
             if (stopped.load(std::memory_order_relaxed)) return;
             if (interrupter && interrupter->wasInterrupted()) {
@@ -163,10 +164,10 @@ pullBack(const GridT& in, const DeformationField& phi, bool inverse, bool thread
                 const openvdb::Vec3d y = xform.indexToWorld(v.getCoord());
                 openvdb::Vec3d x;
                 if (inverse) {
-                    x = phi.apply(y);
+                    x = map.apply(y);
                 } else {
                     const DeformationField::InverseResult r =
-                        haveGuess ? phi.inverse(y, y + offset) : phi.inverse(y);
+                        haveGuess ? map.inverse(y, y + offset) : map.inverse(y);
                     if (!r.found) ++failures[li];
                     x = r.x;
                     offset = x - y;
