@@ -1,8 +1,11 @@
 /// @file TestEnergy.cc
 /// @brief Properties of the assembled energy: zero for identical shapes and phi = Id, +inf for an
 ///        inverted simplex, independence of the thread count, the structure of the directional
-///        energy, and the null-Lagrangian property of the volume terms.
+///        energy, the null-Lagrangian property of the volume terms, and value() giving the
+///        energy of valueAndGradient() to the last bit.
 #include "energy/EnergyFixture.h"
+
+#include <vdbmatch/energy/LandmarkTerm.h>
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -236,4 +239,73 @@ TEST(Energy, ConstantOffsetIsTheEnergyOfTheIdentityForIdenticalShapes)
         EXPECT_NEAR(dir.energy->constantOffset(), e, 1e-12 * e);
         EXPECT_EQ(sym.energy->constantOffset(), 0.0);
     }
+}
+
+namespace {
+
+/// value() and valueAndGradient() give the same energy and terms, bit for bit: the descent's
+/// line search evaluates its trials with either (DescentOptions::gradientAtTrials), and the
+/// iterates must not depend on which.
+template <int D>
+void
+checkValueIsTheValueOfValueAndGradient(int level, EnergyKind kind)
+{
+    MatchingProblem<D> P(level, sourceSdf<D>(level), targetSdf<D>(level),
+                         EnergyParameters::defaults(D), kind);
+    LandmarkPairs<D> pairs;
+    pairs.weight = 30;
+    for (int k = 0; k < 4; ++k) {
+        Vec<D> a = Vec<D>::Constant(0.5);
+        a[0] += 0.05 * k;
+        pairs.source.push_back(a);
+        pairs.target.push_back(a + Vec<D>::Constant(0.01 * (k + 1)));
+    }
+    const energy::LandmarkTerm<D> landmarks(*P.lattice, pairs);
+    std::size_t compared = 0;
+    for (const energy::LandmarkTerm<D>* lm :
+         {static_cast<const energy::LandmarkTerm<D>*>(nullptr), &landmarks}) {
+        P.energy->setLandmarks(lm);
+        for (unsigned seed = 1; seed <= 6; ++seed) {
+            const NodeVectors<D> u = P.randomDisplacement(seed, 0.15 * seed * P.lattice->h());
+            EnergyTerms tv, tg;
+            NodeVectors<D> g;
+            const Real ev = P.energy->value(u, &tv);
+            const Real eg = P.energy->valueAndGradient(u, g, &tg);
+            ASSERT_TRUE(std::isfinite(eg)) << "seed " << seed;
+            EXPECT_EQ(ev, eg) << "seed " << seed << ", relative difference " << (ev - eg) / eg;
+            for (int h = 0; h < 2; ++h) {
+                EXPECT_EQ(tv.match[h], tg.match[h]);
+                EXPECT_EQ(tv.mem[h], tg.mem[h]);
+                EXPECT_EQ(tv.bend[h], tg.bend[h]);
+                EXPECT_EQ(tv.vol[h], tg.vol[h]);
+            }
+            EXPECT_EQ(tv.landmark, tg.landmark);
+            EXPECT_EQ(tv.bandSimplices, tg.bandSimplices);
+            if (lm) {
+                EXPECT_GT(tg.landmark, 0);
+            }
+            ++compared;
+        }
+    }
+    P.energy->setLandmarks(nullptr);
+    EXPECT_EQ(compared, 12u);
+}
+
+} // namespace
+
+TEST(Energy, ValueIsTheValueOfValueAndGradientSymmetric3D)
+{
+    checkValueIsTheValueOfValueAndGradient<3>(4, EnergyKind::Symmetric);
+}
+TEST(Energy, ValueIsTheValueOfValueAndGradientDirectional3D)
+{
+    checkValueIsTheValueOfValueAndGradient<3>(4, EnergyKind::Directional);
+}
+TEST(Energy, ValueIsTheValueOfValueAndGradientSymmetric2D)
+{
+    checkValueIsTheValueOfValueAndGradient<2>(6, EnergyKind::Symmetric);
+}
+TEST(Energy, ValueIsTheValueOfValueAndGradientDirectional2D)
+{
+    checkValueIsTheValueOfValueAndGradient<2>(6, EnergyKind::Directional);
 }

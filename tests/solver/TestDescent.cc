@@ -359,6 +359,62 @@ TEST(Descent, MaxIterationsAndThreadCountIndependence)
     EXPECT_TRUE(serial == threaded);
     EXPECT_EQ(a.energy, b.energy);
     EXPECT_EQ(a.energyEvaluations, b.energyEvaluations);
+    EXPECT_EQ(a.gradientEvaluations, b.gradientEvaluations);
+}
+
+namespace {
+
+/// The line search's trials with gradients (DescentOptions::gradientAtTrials, the default) or
+/// without: the same iterates to the last bit, with the accepted trial's gradient reused.
+template <int D>
+void
+checkGradientsAtTrials(DescentMethod method, int level, int iterations)
+{
+    const EnergyParameters params = EnergyParameters::defaults(D);
+    Problem<D> problem(params);
+    const auto lattice = SimplexLattice<D>::dense(level);
+    const Energy<D> energy(lattice, *problem.shape1, *problem.shape2, params,
+                           EnergyKind::Symmetric);
+    const H1Metric<D> metric(lattice, DEFAULT_METRIC_TAU_FACTOR * energy.sigma() * energy.sigma());
+    DescentOptions opts;
+    opts.method = method;
+    opts.maxIterations = iterations;
+    opts.energyTolerance = 0;
+    opts.gradientAtTrials = true;
+    const Descent<D> fused(energy, metric, opts);
+    opts.gradientAtTrials = false;
+    const Descent<D> separate(energy, metric, opts);
+    NodeVectors<D> u1 = NodeVectors<D>::Zero(D, lattice.nodeCount());
+    NodeVectors<D> u2 = u1;
+    const Report a = fused.run(u1);
+    const Report b = separate.run(u2);
+    EXPECT_EQ(a.iterations, iterations);
+    EXPECT_EQ(b.iterations, iterations);
+    EXPECT_TRUE(u1 == u2);
+    EXPECT_EQ(a.energy, b.energy);
+    EXPECT_EQ(a.gradNorm, b.gradNorm);
+    EXPECT_EQ(a.metricIterations, b.metricIterations);
+    // Fused: every trial is a value-and-gradient evaluation, plus the initial one. Separate:
+    // the trials are value-only, and a gradient follows each accepted step.
+    EXPECT_EQ(a.energyEvaluations, 0u);
+    EXPECT_EQ(a.gradientEvaluations, b.energyEvaluations + 1);
+    EXPECT_EQ(b.gradientEvaluations, std::size_t(iterations) + 1);
+    EXPECT_GE(b.energyEvaluations, std::size_t(iterations));
+}
+
+} // namespace
+
+TEST(Descent, GradientsAtTrialsGiveTheSameIterates2D)
+{
+    checkGradientsAtTrials<2>(DescentMethod::NonlinearCG, 5, 40);
+}
+TEST(Descent, GradientsAtTrialsGiveTheSameIteratesLimitedMemoryBfgs2D)
+{
+    checkGradientsAtTrials<2>(DescentMethod::LBFGS, 5, 40);
+}
+TEST(Descent, GradientsAtTrialsGiveTheSameIterates3D)
+{
+    checkGradientsAtTrials<3>(DescentMethod::NonlinearCG, 3, 15);
 }
 
 TEST(Descent, IdenticalShapesStayAtIdentity)

@@ -71,7 +71,7 @@ LandmarkTerm<D>::value(const NodeVectors<D>& u) const
     Real sum = 0;
     for (std::size_t k = 0; k < mTarget.size(); ++k)
         sum += (mapped(u, k) - mTarget[k]).squaredNorm();
-    return mWeight * sum / Real(mTarget.size());
+    return (mWeight / Real(mTarget.size())) * sum; // as addGradient(), to the last bit
 }
 
 template <int D>

@@ -40,7 +40,9 @@ volumeInverse(const SimplexKinematics<D>& k, Real c, DensityGradient<D>* grad)
         grad->dA += (c * e) * k.C;
         return c * e * k.J;
     } else {
-        return c * k.J * math::W<D>(k.B, 1.0 / k.J);
+        // The products in the order of the branch above (value() and valueAndGradient() give
+        // the same bits).
+        return c * math::W<D>(k.B, 1.0 / k.J) * k.J;
     }
 }
 

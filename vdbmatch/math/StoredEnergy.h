@@ -66,11 +66,14 @@ W(const Mat<D>& A, Real detA)
     return frobeniusPowerDp1<D>(s) / (D + 1) + c * std::sqrt(1.0 + t * t) - off;
 }
 
+/// W of eq:Wbounded, with det A by the Laplace expansion W(A, dW) uses (the same bits as the
+/// energy of W(A, dW)).
 template <int D>
 inline Real
 W(const Mat<D>& A)
 {
-    return W<D>(A, A.determinant());
+    const Mat<D> C = cof(A);
+    return W<D>(A, (A.col(0).transpose() * C.col(0)).value()); // Laplace expansion
 }
 
 /// W of eq:Wbounded and dW/dA = |A|^{d-1} A + sqrt2 d^{(d-1)/2} (det A - 2)/sqrt(1+(det A-2)^2) cof

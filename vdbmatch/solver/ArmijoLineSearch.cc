@@ -110,7 +110,7 @@ template <int D>
 LineSearchResult
 ArmijoLineSearch<D>::search(const Energy<D>& energy, const NodeVectors<D>& u, Real E0, Real slope,
                             const NodeVectors<D>& p, NodeVectors<D>& uNew, bool threaded,
-                            openvdb::util::NullInterrupter* interrupter)
+                            openvdb::util::NullInterrupter* interrupter, NodeVectors<D>* gradient)
 {
     const auto& L = energy.lattice();
     const Real h = L.h();
@@ -129,13 +129,15 @@ ArmijoLineSearch<D>::search(const Energy<D>& energy, const NodeVectors<D>& u, Re
             }
         }
         evaluated = true;
+        if (gradient)
+            return energy.valueAndGradient(uNew, *gradient, &terms, threaded, interrupter);
         return energy.value(uNew, &terms, threaded, interrupter);
     };
     LineSearchResult result =
         armijoBacktrack(trial, E0, slope, mInitialStep, pMax, mOpts, interrupter);
     if (result.isAccepted()) {
         mInitialStep = mOpts.grow * result.step;
-        // uNew holds the last trial, the accepted one.
+        // uNew (and the gradient, if asked for) hold the last trial, the accepted one.
     }
     return result;
 }

@@ -109,9 +109,14 @@ public:
     /// @param slope  <g, p> with g the L2 gradient at u (Dirichlet entries excluded)
     /// @param p      direction, D x nodeCount, 0 on Dirichlet nodes
     /// @param threaded, interrupter  forwarded to Energy::value
+    /// @param gradient  null: each trial evaluates the energy alone (Energy::value). Otherwise
+    ///        each trial evaluates value and gradient (Energy::valueAndGradient) into it, so that
+    ///        on acceptance it holds the L2 gradient at @a uNew, the point where a descent needs
+    ///        it next; the accepted energy and terms are then those of valueAndGradient.
     LineSearchResult search(const Energy<D>& energy, const NodeVectors<D>& u, Real E0, Real slope,
                             const NodeVectors<D>& p, NodeVectors<D>& uNew, bool threaded = true,
-                            openvdb::util::NullInterrupter* interrupter = nullptr);
+                            openvdb::util::NullInterrupter* interrupter = nullptr,
+                            NodeVectors<D>* gradient = nullptr);
 
 private:
     ArmijoOptions mOpts;

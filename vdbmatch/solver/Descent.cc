@@ -137,13 +137,16 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
     // guess of H1Metric::applyInverse) was measured to save nothing, the NCG gradients turn too
     // much between iterations (16.5 CG iterations per solve at level 8 of the starfish pair,
     // against 14.0 from 0).
+    auto representative = [&](NodeVectors<D>& gx, NodeVectors<D>& rx) {
+        metric.zeroDirichlet(gx);
+        report.metricIterations += std::size_t(metric.applyInverse(gx, rx, threaded).iterations);
+    };
     auto gradientAt = [&](const NodeVectors<D>& x, NodeVectors<D>& gx, NodeVectors<D>& rx,
                           EnergyTerms& terms) -> Real {
         const Real E = energy.valueAndGradient(x, gx, &terms, threaded, interrupter);
         ++report.gradientEvaluations;
         if (!std::isfinite(E)) return E;
-        metric.zeroDirichlet(gx);
-        report.metricIterations += std::size_t(metric.applyInverse(gx, rx, threaded).iterations);
+        representative(gx, rx);
         return E;
     };
 
@@ -248,9 +251,11 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
         if (interrupted()) return finish(Status::Interrupted);
         if (report.iterations >= mOpts.maxIterations) return finish(Status::MaxIterations);
 
-        const LineSearchResult ls =
-            lineSearch.search(energy, u, E, slope, p, uNew, threaded, interrupter);
-        report.energyEvaluations += std::size_t(ls.evaluations);
+        const bool trialGradients = mOpts.gradientAtTrials;
+        const LineSearchResult ls = lineSearch.search(
+            energy, u, E, slope, p, uNew, threaded, interrupter, trialGradients ? &gNew : nullptr);
+        (trialGradients ? report.gradientEvaluations : report.energyEvaluations) +=
+            std::size_t(ls.evaluations);
         if (ls.status == LineSearchStatus::Interrupted) return finish(Status::Interrupted);
         if (!ls.isAccepted()) {
             if (restarted) return finish(Status::LineSearchFailed);
@@ -263,7 +268,15 @@ Descent<D>::run(NodeVectors<D>& u, const IterationObserver& observer, bool threa
 
         const Real maxDisplacement = ls.step * p.cwiseAbs().maxCoeff();
         u.swap(uNew);
-        const Real Enew = gradientAt(u, gNew, rNew, terms);
+        Real Enew = ls.energy;
+        if (trialGradients) {
+            // gNew is the gradient at the accepted trial (ArmijoLineSearch::search), the same
+            // valueAndGradient call gradientAt() would make.
+            terms = ls.terms;
+            representative(gNew, rNew);
+        } else {
+            Enew = gradientAt(u, gNew, rNew, terms);
+        }
         ++report.iterations;
         report.lastStep = ls.step;
         if (!std::isfinite(Enew)) {
