@@ -5,7 +5,8 @@
 /// With g_k the L2 gradient of E at u_k (a co-vector, Dirichlet entries dropped) and
 /// r_k = G^{-1} g_k its H^1 representative (H1Metric):
 /// @f[ p_0 = -r_0,\qquad p_k = -r_k + \beta_k p_{k-1},\qquad u_{k+1} = u_k + t_k p_k, @f]
-/// t_k from ArmijoLineSearch, and the metric inner products
+/// t_k from ArmijoLineSearch (whose trials evaluate the gradient too, so that g_{k+1} comes with
+/// the accepted trial: DescentOptions::gradientAtTrials), and the metric inner products
 /// - Fletcher-Reeves: beta_k = <g_k, r_k> / <g_{k-1}, r_{k-1}>
 /// - Polak-Ribiere+: beta_k = max(0, <g_k - g_{k-1}, r_k> / <g_{k-1}, r_{k-1}>) (default)
 /// - steepest descent: beta_k = 0.
