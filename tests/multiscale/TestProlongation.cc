@@ -2,14 +2,17 @@
 /// @brief Prolongation of piecewise-linear displacements: linear fields and coarse nodal values
 ///        are reproduced exactly, det D phi and the volume energies are preserved (the Kuhn split
 ///        is nested), prolongation over two levels equals two single steps, and fine nodes
-///        outside the coarse cells get u = 0.
+///        outside the coarse cells get u = 0; a point located in a given cell is where the
+///        search puts it.
 #include "energy/EnergyFixture.h"
 
+#include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
 
 using namespace vdbmatch;
 using namespace vdbmatch::multiscale;
@@ -202,4 +205,74 @@ TEST(Prolongation, RejectsCoarserTarget)
     const NodeVectors<2> wrongSize = NodeVectors<2>::Zero(2, 3);
     EXPECT_THROW(prolongate(finer, onFiner, coarse), openvdb::ValueError);
     EXPECT_THROW(prolongate(coarse, wrongSize, finer), openvdb::ValueError);
+}
+
+namespace {
+
+/// On an adaptive lattice (cells of four sizes), every point of the open interior of a cell is
+/// located by locateInCell() exactly as by the search (nodes and weights to the last bit), and
+/// Cursor::cell() names the cell the search uses, also for points on faces.
+template <int D>
+void
+checkLocateInCellIsTheSearch()
+{
+    const Vec<D> centre = Vec<D>::Constant(0.41);
+    const auto lattice = buildAdaptiveLattice<D>(
+        6, 3, [&](const Vec<D>& c, Real radius) { return (c - centre).norm() < 0.2 + radius; });
+    std::set<int> sizes;
+    for (const auto& cell : lattice.cells())
+        sizes.insert(cell.log2Size);
+    ASSERT_GE(sizes.size(), 3u);
+    const PiecewiseLinearInterpolator<D> phi(lattice);
+    typename PiecewiseLinearInterpolator<D>::Cursor cursor(phi);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<Real> U(0, 1);
+    const Real h = lattice.h();
+    std::size_t interior = 0, onFaces = 0;
+    for (std::size_t ci = 0; ci < lattice.cells().size(); ci += 7) {
+        const auto& cell = lattice.cells()[ci];
+        const Real side = h * Real(1 << cell.log2Size);
+        for (int k = 0; k < 4; ++k) {
+            // Dyadic points of the cell (as the output grid's nodes are), some on its faces.
+            Vec<D> x;
+            bool inside = true;
+            for (int a = 0; a < D; ++a) {
+                const int steps = int(U(rng) * 16); // 0..15 sixteenths of the side
+                x[a] = cell.origin[a] * h + side * steps / 16.0;
+                inside = inside && steps > 0;
+            }
+            typename PiecewiseLinearInterpolator<D>::Location searched, direct;
+            ASSERT_TRUE(phi.locate(x, searched));
+            const int32_t found = cursor.cell(x);
+            ASSERT_GE(found, 0);
+            phi.locateInCell(std::size_t(found), x, direct);
+            EXPECT_EQ(direct.nodes, searched.nodes);
+            EXPECT_EQ(direct.weights, searched.weights);
+            if (inside) {
+                EXPECT_EQ(found, int32_t(ci));
+                phi.locateInCell(ci, x, direct);
+                EXPECT_EQ(direct.nodes, searched.nodes);
+                EXPECT_EQ(direct.weights, searched.weights);
+                ++interior;
+            } else {
+                ++onFaces;
+            }
+        }
+    }
+    EXPECT_GT(interior, 100u);
+    EXPECT_GT(onFaces, 10u);
+    Vec<D> outside = Vec<D>::Constant(0.5);
+    outside[0] = 1.5;
+    EXPECT_EQ(cursor.cell(outside), -1);
+}
+
+} // namespace
+
+TEST(Prolongation, LocateInCellIsTheSearch2D)
+{
+    checkLocateInCellIsTheSearch<2>();
+}
+TEST(Prolongation, LocateInCellIsTheSearch3D)
+{
+    checkLocateInCellIsTheSearch<3>();
 }

@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -48,7 +49,27 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
     const double H = std::ldexp(1.0, -level);
     const double toWorld = 1.0 / placement.scale;
 
-    const multiscale::PiecewiseLinearInterpolator<D> phi(lattice);
+    using Interpolator = multiscale::PiecewiseLinearInterpolator<D>;
+    using Cell = typename SimplexLattice<D>::Cell;
+    const Interpolator phi(lattice);
+    // Lattice index units per output voxel (the output level is at most the lattice's).
+    const int scale = 1 << (lattice.level() - level);
+    // The cell containing the whole box of a leaf's nodes, in the half-open sense (its nodes are
+    // inside the cell or on its lower faces), or -1.
+    auto leafCell = [&](typename Interpolator::Cursor& cursor, const openvdb::Coord& origin) {
+        Vec<D> centre;
+        for (int a = 0; a < D; ++a)
+            centre[a] = std::min(1.0, (origin[a] + 0.5 * (LeafT::DIM - 1)) * H);
+        const int32_t ci = cursor.cell(centre);
+        if (ci < 0) return int32_t(-1);
+        const Cell& c = lattice.cells()[std::size_t(ci)];
+        const int side = 1 << c.log2Size;
+        for (int a = 0; a < D; ++a) {
+            const int first = origin[a] * scale, last = (origin[a] + int(LeafT::DIM) - 1) * scale;
+            if (first < c.origin[a] || last >= c.origin[a] + side) return int32_t(-1);
+        }
+        return ci;
+    };
     const int leaves1 = (n + 1 + int(LeafT::DIM) - 1) / int(LeafT::DIM);
     const int leavesZ = D == 3 ? leaves1 : 1;
     const std::size_t leafCount =
@@ -57,7 +78,7 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
     std::vector<char> bad(leafCount, 0);
 
     auto fill = [&](const tbb::blocked_range<std::size_t>& range) {
-        typename multiscale::PiecewiseLinearInterpolator<D>::Cursor cursor(phi);
+        typename Interpolator::Cursor cursor(phi);
         for (std::size_t li = range.begin(); li != range.end(); ++li) {
             const int bx = int(li % std::size_t(leaves1));
             const int by = int((li / std::size_t(leaves1)) % std::size_t(leaves1));
@@ -66,6 +87,12 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                                         bz * int(LeafT::DIM));
             auto leaf = std::make_unique<LeafT>(origin, openvdb::Vec3s(0.0f), false);
             const int zEnd = D == 3 ? int(LeafT::DIM) : 1;
+            // Most leaves lie inside one lattice cell (far from the shapes the cells are larger
+            // than a leaf): then the nodes in the cell's open interior are located in it
+            // directly, which is what the search would find (locateInCell), and only the nodes
+            // on its lower faces are searched.
+            const int32_t cellIndex = leafCell(cursor, origin);
+            const Cell* cell = cellIndex >= 0 ? &lattice.cells()[std::size_t(cellIndex)] : nullptr;
             for (int k = 0; k < zEnd; ++k) {
                 for (int j = 0; j < int(LeafT::DIM); ++j) {
                     for (int i = 0; i < int(LeafT::DIM); ++i) {
@@ -75,7 +102,16 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                         for (int a = 0; a < D; ++a)
                             x[a] = ijk[a] * H;
                         Vec<D> du = Vec<D>::Zero();
-                        cursor.evaluate(u, x, du);
+                        bool interior = cell != nullptr;
+                        for (int a = 0; a < D && interior; ++a)
+                            interior = ijk[a] * scale > cell->origin[a];
+                        if (interior) {
+                            typename Interpolator::Location loc;
+                            phi.locateInCell(std::size_t(cellIndex), x, loc);
+                            du = Interpolator::interpolate(u, loc);
+                        } else {
+                            cursor.evaluate(u, x, du);
+                        }
                         openvdb::Vec3s value(0.0f);
                         for (int a = 0; a < D; ++a) {
                             value[a] = float(du[a] * toWorld);

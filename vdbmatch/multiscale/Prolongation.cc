@@ -75,9 +75,59 @@ PiecewiseLinearInterpolator<D>::Cursor::evaluate(const NodeVectors<D>& u, const 
 }
 
 template <int D>
+int32_t
+PiecewiseLinearInterpolator<D>::Cursor::cell(const Vec<D>& x)
+{
+    Location loc;
+    int32_t found = -1;
+    mInterpolator->locateWith(
+        x, loc,
+        [this](std::size_t s, const openvdb::Coord& c) { return mAccessors[s]->getValue(c); },
+        &found);
+    return found;
+}
+
+template <int D>
+void
+PiecewiseLinearInterpolator<D>::simplexIn(const typename SimplexLattice<D>::Cell& cell,
+                                          const Vec<D>& p, Location& loc)
+{
+    const Real side = Real(1 << cell.log2Size);
+    Vec<D> t;
+    for (int a = 0; a < D; ++a)
+        t[a] = (p[a] - Real(cell.origin[a])) / side;
+    // Axes by decreasing t, ties in axis order: the Kuhn path through the simplex containing t.
+    // (Insertion sort: stable like std::stable_sort, which allocates a buffer at every call; the
+    // dense output grid calls this at every node.)
+    std::array<int, D> order;
+    std::iota(order.begin(), order.end(), 0);
+    for (int i = 1; i < D; ++i)
+        for (int j = i; j > 0 && t[order[j]] > t[order[j - 1]]; --j)
+            std::swap(order[j], order[j - 1]);
+    int mask = 0;
+    loc.nodes[0] = cell.corners[0];
+    loc.weights[0] = 1 - t[order[0]];
+    for (int m = 1; m <= D; ++m) {
+        mask |= 1 << order[m - 1];
+        loc.nodes[m] = cell.corners[mask];
+        loc.weights[m] = m < D ? t[order[m - 1]] - t[order[m]] : t[order[D - 1]];
+    }
+}
+
+template <int D>
+void
+PiecewiseLinearInterpolator<D>::locateInCell(std::size_t cellIndex, const Vec<D>& x,
+                                             Location& loc) const
+{
+    // The same index coordinates as locateWith().
+    simplexIn(mLattice->cells()[cellIndex], x * Real(mLattice->resolution()), loc);
+}
+
+template <int D>
 template <typename CellAt>
 bool
-PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const
+PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt,
+                                           int32_t* found) const
 {
     for (int a = 0; a < D; ++a)
         if (!(x[a] >= 0 && x[a] <= 1)) return false;
@@ -103,26 +153,8 @@ PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellA
                 if (sub & (1 << a)) c[a] -= 1;
             const int32_t ci = cellAt(s, c);
             if (ci < 0) continue;
-            const auto& cell = L.cells()[std::size_t(ci)];
-            Vec<D> t;
-            for (int a = 0; a < D; ++a)
-                t[a] = (p[a] - Real(cell.origin[a])) / side;
-            // Axes by decreasing t, ties in axis order: the Kuhn path through the simplex
-            // containing t. (Insertion sort: stable like std::stable_sort, which allocates a
-            // buffer at every call; the dense output grid calls this at every node.)
-            std::array<int, D> order;
-            std::iota(order.begin(), order.end(), 0);
-            for (int i = 1; i < D; ++i)
-                for (int j = i; j > 0 && t[order[j]] > t[order[j - 1]]; --j)
-                    std::swap(order[j], order[j - 1]);
-            int mask = 0;
-            loc.nodes[0] = cell.corners[0];
-            loc.weights[0] = 1 - t[order[0]];
-            for (int m = 1; m <= D; ++m) {
-                mask |= 1 << order[m - 1];
-                loc.nodes[m] = cell.corners[mask];
-                loc.weights[m] = m < D ? t[order[m - 1]] - t[order[m]] : t[order[D - 1]];
-            }
+            simplexIn(L.cells()[std::size_t(ci)], p, loc);
+            if (found) *found = ci;
             return true;
         }
     }

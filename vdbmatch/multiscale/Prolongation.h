@@ -74,16 +74,28 @@ public:
         explicit Cursor(const PiecewiseLinearInterpolator& interpolator);
         bool locate(const Vec<D>& x, Location& loc);
         bool evaluate(const NodeVectors<D>& u, const Vec<D>& x, Vec<D>& value);
+        /// Index of a cell containing @a x (the one locate() uses), or -1 if there is none.
+        int32_t cell(const Vec<D>& x);
 
     private:
         const PiecewiseLinearInterpolator* mInterpolator;
         std::vector<std::unique_ptr<openvdb::Int32Grid::ConstAccessor>> mAccessors;
     };
 
+    /// Locates @a x in cell @a cellIndex of the lattice, which must contain it. For x in the
+    /// open interior of the cell this is the location locate() finds, to the last bit (no other
+    /// cell contains such a point); for many points of one cell it saves the search.
+    void locateInCell(std::size_t cellIndex, const Vec<D>& x, Location& loc) const;
+
 private:
-    /// locate() with @a cellAt(s, ijk) giving the index of the cell of side 2^s at ijk (or -1).
+    /// locate() with @a cellAt(s, ijk) giving the index of the cell of side 2^s at ijk (or -1);
+    /// the index of the cell found goes to @a found if given.
     template <typename CellAt>
-    bool locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt) const;
+    bool locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt,
+                    int32_t* found = nullptr) const;
+    /// The simplex of @a cell containing the lattice index point @a p, and its weights.
+    static void simplexIn(const typename SimplexLattice<D>::Cell& cell, const Vec<D>& p,
+                          Location& loc);
 
     const SimplexLattice<D>* mLattice;
     /// mCellIndex[s]: voxel origin/2^s -> index of the cell of side 2^s h, or null if none.
