@@ -34,7 +34,6 @@
 #include <fcntl.h>
 #include <filesystem>
 #include <fstream>
-#include <functional>
 #include <iterator>
 #include <optional>
 #include <ostream>
@@ -1047,30 +1046,27 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     }
     // Each file is compressed and written on one thread (OpenVDB's blosc calls are serial), so
     // the files are written side by side; each one atomically, as before.
-    std::vector<std::function<void()>> writers;
-    writers.push_back([&] {
+    tbb::task_group writers;
+    writers.run([&] {
         writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
     });
     if (inverseGrid) {
-        writers.push_back([&] {
+        writers.run([&] {
             writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid}, fileMeta);
         });
     }
     if (jacobianGrid) {
-        writers.push_back([&] {
+        writers.run([&] {
             writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid},
                                  fileMeta);
         });
     }
-    writers.push_back([&] {
+    writers.run([&] {
         writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
         writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
                             [&](std::ostream& os) { writeObj(os, result.deformedSource); });
     });
-    tbb::task_group group;
-    for (const auto& write : writers)
-        group.run(write);
-    group.wait(); // rethrows the first writer's exception, after the others finished
+    writers.wait(); // rethrows the first writer's exception, after the others finished
     extra.files.push_back("deformation.vdb");
     if (inverseGrid) extra.files.push_back("inverse.vdb");
     if (jacobianGrid) extra.files.push_back("jacobian.vdb");
