@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # Accuracy benchmark on synthetic pairs with a known ground-truth map g (issue 8, item 3).
 #
-# Generates the pairs (bench/accuracy/make_pairs.py: a creature in 3D and a figure in 2D, each
-# moved by an articulated limb motion, a swirl/bend and a mild anisotropic stretch; the target is
-# g applied to the source's vertices), then for every pair and energy runs vdb_match forward
-# (source -> target) and reverse (target -> source) with the same options, `vdb_match
-# consistency` on the two deformations, and prints one row per pair x energy
-# (bench/accuracy/score.py; lengths in unit-box units):
+# Generates the pairs (bench/accuracy/make_pairs.py: a creature and an animal in 3D and a figure
+# in 2D, moved by articulated limb motions (moderate and large), twists and swirls, and a mild
+# anisotropic stretch; the target is g applied to the source's vertices), then for every pair
+# and energy runs vdb_match forward (source -> target) and reverse (target -> source) with the
+# same options, `vdb_match consistency` on the two deformations, and prints one row per pair x
+# energy (bench/accuracy/score.py; lengths in unit-box units):
 #   fwd s, rev s  wall seconds of the forward and the reverse match
 #   resid         mean |d2(phi(v))| over M1's vertices (report.json result.residual.meanUnit)
 #   err mean/p95  mean and 95th percentile of |phi(v) - g(v)| over M1's vertices
@@ -21,9 +21,10 @@
 #            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
 #            [--resampled]
 #   VDB_MATCH   default build/tools/vdb_match/vdb_match
-#   --pairs     default all: creature_articulated, creature_arm_up, creature_swirl,
-#               creature_stretch, figure_articulated, figure_arms_up, figure_swirl,
-#               figure_stretch (make_pairs.py --list)
+#   --pairs     names, or a set: all (default; the sixteen pairs of make_pairs.py --list:
+#               a creature, an animal and a figure, near-isometric, large-motion and stretch
+#               pairs) or speed (the eight creature and figure pairs that the speed issue's
+#               figures in docs/performance.md use: make_pairs.py --list speed)
 #   --levels3d  default 4..8 (the 3D default of vdb_match); --levels2d default 4..9
 #   --energies  default symmetric,directional
 #   --out DIR   keep pairs and outputs in DIR (pairs are regenerated only when missing or older
@@ -90,7 +91,7 @@ for ((i = 0; i < ${#EXTRA_ARGS[@]}; i++)); do
     --threads=*) THREAD_ARGS=("${EXTRA_ARGS[i]}") ;;
   esac
 done
-[ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
+case "$PAIRS" in all|speed) PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list "$PAIRS" | paste -sd, -) ;; esac
 IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
 IFS=, read -r -a ENERGY_LIST <<<"$ENERGIES"
 for e in "${ENERGY_LIST[@]}"; do

@@ -6,7 +6,7 @@
 # and give their binaries' paths; a peer without a path is skipped with a message. Not in CI.
 #
 # Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--out DIR]
-#   --pairs  default all (bench/accuracy/make_pairs.py --list)
+#   --pairs  names, or a set: all (default; make_pairs.py --list) or speed
 #   --bcpd   the bcpd binary (built with its makefile; needs OpenBLAS/LAPACK)
 #   --amm    the AMM_NRR binary (CMake; needs OpenMesh: Debian libopenmesh-dev); 3D only
 #   --out    keep pairs and outputs in DIR (pairs are reused as bench_accuracy.sh does)
@@ -55,7 +55,7 @@ MAKE_PAIRS=$ROOT/bench/accuracy/make_pairs.py
 
 source "$ROOT/bench/accuracy/ensure_pairs.sh"
 output_dir peers
-[ "$PAIRS" != all ] || PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list | paste -sd, -)
+case "$PAIRS" in all|speed) PAIRS=$("$PYTHON" "$MAKE_PAIRS" --list "$PAIRS" | paste -sd, -) ;; esac
 IFS=, read -r -a PAIR_LIST <<<"$PAIRS"
 
 ensure_pairs "$OUT" "${PAIR_LIST[@]}" >/dev/null

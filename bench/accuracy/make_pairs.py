@@ -14,19 +14,28 @@ segments cross, counter-clockwise).
 Shapes
 - 3D "creature": the starfish-like creature of tools/make_example_assets.py (a round body and
   five tapered, flattened arms; smooth union of round cones), meshed at its zero level by
-  OpenVDB's volumeToMesh on a dense grid of CREATURE_VOXEL, quads split along their shorter
-  diagonal, vertices sorted (so the output does not depend on OpenVDB's vertex order).
+  OpenVDB's volumeToMesh on a dense grid of CREATURE_VOXEL (implicit_mesh: quads split along
+  their shorter diagonal, vertices sorted, so the output does not depend on OpenVDB's order).
+- 3D "animal": a quadruped (body, neck and head, four legs, a tail; round cones, animal_parts),
+  meshed the same way at ANIMAL_VOXEL.
 - 2D "figure": the person-like silhouette (pose A) of tools/make_example_assets.py, resampled
   uniformly in arc length to FIGURE_POINTS points, counter-clockwise.
 
-Maps g (3D and 2D each; see PAIRS)
+Maps g (see PAIRS; pair.json "kind" says near-isometric, large motion or stretch)
 - articulated: limbs rotating about a joint by a rotation whose rate is blended smoothly by a
-  weight along the limb (logistic in the distance along the limb, times a lateral window); the
-  weight moves with the rotation, so the limb beyond the ramp turns rigidly ("skeleton-driven
-  smooth flow").
-- swirl: 3D: a twist of one arm about its own axis growing along the arm, a pinwheel swirl
-  about the body's axis whose angle grows with the distance from it, and a cupping bend of the
-  arms; 2D: both arms curled (rotation about the shoulder whose angle grows along the arm, in
+  weight along the limb (logistic in the distance along the limb, times a lateral window, or in
+  3D for the animal a cylinder about the limb: radial_limb_rotation); the weight moves with the
+  rotation, so the limb beyond the ramp turns rigidly ("skeleton-driven smooth flow"). Creature:
+  three arms by 22-32 deg; animal: the head turned 30 deg, the tail swung 40 deg; figure: an
+  arm raised 30 deg and a forearm turned 30 deg.
+- large articulated motion, the same flows further: the creature's arm raised 100 deg, the
+  animal's front leg swung 90 deg forward, the figure's arms raised 60 and 90 deg, its legs
+  spread 25 deg, a frontal squat (thighs out 22 deg, shins back in 40 deg), a star jump (arms
+  90 deg, legs 20 deg).
+- twist and swirl: 3D creature: a twist of one arm about its own axis growing along the arm, a
+  pinwheel swirl about the body's axis whose angle grows with the distance from it, and a
+  cupping bend of the arms; animal: the torso twisted about its long axis (-11 to +11 deg);
+  2D: both arms curled (rotation about the shoulder whose angle grows along the arm, in
   opposite senses), a swirl about the chest and a sideways bend of the body.
 - stretch: the flow of a spatially varying anisotropic rate field (scale about 1.15 x 0.9 x 1.0,
   the rate modulated by +-25 %), then a small rigid rotation and translation.
@@ -40,14 +49,18 @@ Output: one directory per pair, holding
   landmarks_source.csv, landmarks_target.csv: 5 extremities of the source (farthest-point
              sampling from the vertex farthest from the centroid) and their images g(v), for
              vdb_match --landmarks (bench_accuracy.sh --landmarks);
-  pair.json: name, dimension, description, vertex count, mean/max motion |g(v) - v| (world and
-             as a fraction of the source's bounding-box diagonal), checks (min det Dg, edges).
+  pair.json: name, dimension, shape, kind, description, vertex count, mean/max motion
+             |g(v) - v| (world and as a fraction of the source's bounding-box diagonal),
+             checks (min det Dg, edges).
 Files are written with 7 decimals; g is applied to the rounded source coordinates, and the
 target file holds the same numbers as truth.xyz.
 
 Usage (system python, which has numpy and pyopenvdb):
-    /usr/bin/python3 bench/accuracy/make_pairs.py OUTDIR [--only NAME[,NAME...]] [--list]
-Deterministic; all six pairs take about 40 s (2 loaded cores), the 3D ones most of it.
+    /usr/bin/python3 bench/accuracy/make_pairs.py OUTDIR [--only NAME[,NAME...]]
+    /usr/bin/python3 bench/accuracy/make_pairs.py --list [all|speed]
+--list prints the pair names, all of them or a named set (SETS: "speed", the eight pairs of
+the speed issue's accuracy benchmark). Deterministic; the sixteen pairs take about 2 minutes
+(2 loaded cores), the 3D ones most of it.
 """
 
 import json
@@ -181,24 +194,24 @@ def arm(i):
     return mea.arm_directions()[i]
 
 
-def creature_mesh():
-    """Closed triangle mesh of the creature (volumeToMesh of the implicit function on a dense
-    grid), vertices sorted lexicographically, faces sorted."""
+def implicit_mesh(function, lo, hi, voxel, name):
+    """Closed triangle mesh of the zero level of `function` (negative inside) over the box
+    [lo, hi]: OpenVDB's volumeToMesh on a dense grid of `voxel`, quads split along their shorter
+    diagonal, vertices sorted lexicographically, faces sorted (so that the output does not
+    depend on OpenVDB's vertex order)."""
     import pyopenvdb as vdb
-    vox = CREATURE_VOXEL
-    lo = np.array([-1.15, -1.05, -0.4])
-    hi = np.array([1.15, 1.15, 0.4])
-    n = np.ceil((hi - lo) / vox).astype(int) + 1
-    axes = [lo[a] + vox * np.arange(n[a]) for a in range(3)]
+    lo = np.asarray(lo, dtype=float)
+    hi = np.asarray(hi, dtype=float)
+    n = np.ceil((hi - lo) / voxel).astype(int) + 1
+    axes = [lo[a] + voxel * np.arange(n[a]) for a in range(3)]
     grid_points = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
-    values = np.concatenate([mea.starfish_function(c)
-                             for c in np.array_split(grid_points, 64)]).reshape(n)
+    values = np.concatenate([function(c) for c in np.array_split(grid_points, 64)]).reshape(n)
     if values[0, :, :].min() <= 0 or values[-1].min() <= 0 or values[:, 0].min() <= 0 or \
             values[:, -1].min() <= 0 or values[:, :, 0].min() <= 0 or values[:, :, -1].min() <= 0:
-        raise RuntimeError("creature: meshing grid too small")
-    grid = vdb.FloatGrid(background=3.0 * vox)
+        raise RuntimeError("%s: meshing grid too small" % name)
+    grid = vdb.FloatGrid(background=3.0 * voxel)
     grid.copyFromArray(values.astype(np.float32), ijk=(0, 0, 0), tolerance=0.0)
-    grid.transform = vdb.createLinearTransform(voxelSize=vox)
+    grid.transform = vdb.createLinearTransform(voxelSize=voxel)
     points, triangles, quads = grid.convertToPolygons(isovalue=0.0, adaptivity=0.0)
     points = points.astype(float) + lo
     q = quads.astype(np.int64)
@@ -221,10 +234,16 @@ def creature_mesh():
     tris = np.stack([tris[np.arange(len(tris)), (first + k) % 3] for k in range(3)], axis=1)
     tris = tris[np.lexsort((tris[:, 2], tris[:, 1], tris[:, 0]))]
     if len(np.unique(points, axis=0)) != len(points):
-        raise RuntimeError("creature: duplicate vertices")
+        raise RuntimeError("%s: duplicate vertices" % name)
     if signed_volume(points, tris) < 0.0:
         tris = tris[:, [0, 2, 1]]
     return points, tris
+
+
+def creature_mesh():
+    """The creature (make_example_assets.starfish_function) meshed by implicit_mesh."""
+    return implicit_mesh(mea.starfish_function, (-1.15, -1.05, -0.4), (1.15, 1.15, 0.4),
+                         CREATURE_VOXEL, "creature")
 
 
 def signed_volume(points, tris):
@@ -371,6 +390,97 @@ def creature_stretch():
 
 
 # ---------------------------------------------------------------------------------------------
+# 3D animal (issue: correspondence): a quadruped with a head on a neck, four legs and a tail
+# ---------------------------------------------------------------------------------------------
+
+ANIMAL_VOXEL = 0.012   # meshing grid (world units; the animal is ~2.2 long)
+ANIMAL_BLEND = 0.03    # smooth-union width (log-sum-exp)
+ANIMAL_SHOULDER = np.array([0.36, -0.15, -0.10])   # top of the front right leg
+ANIMAL_NECK = np.array([0.50, 0.0, 0.10])          # base of the neck
+ANIMAL_TAIL = np.array([-0.62, 0.0, 0.08])         # root of the tail
+
+
+def animal_parts():
+    """Round cones (a, r_a, b, r_b) of the animal: body along x, neck and head at +x, four legs
+    (left y > 0, right y < 0), tail at -x."""
+    parts = [((-0.55, 0.0, 0.0), 0.25, (0.45, 0.0, 0.02), 0.27),     # body
+             ((0.50, 0.0, 0.10), 0.15, (0.72, 0.0, 0.42), 0.11),     # neck
+             ((0.72, 0.0, 0.50), 0.15, (0.98, 0.0, 0.40), 0.07),     # head, snout forward
+             ((-0.62, 0.0, 0.08), 0.075, (-1.10, 0.0, 0.32), 0.035)]  # tail
+    for x in (0.36, -0.44):
+        for y in (0.15, -0.15):
+            parts.append(((x, y, -0.10), 0.11, (x + 0.02, 1.07 * y, -0.78), 0.065))  # legs
+    return [(np.array(a), ra, np.array(b), rb) for a, ra, b, rb in parts]
+
+
+def animal_function(p):
+    """Implicit function of the animal (negative inside; a distance only approximately)."""
+    return mea.smooth_union([mea.sd_round_cone(p, a, b, ra, rb)
+                             for a, ra, b, rb in animal_parts()], ANIMAL_BLEND)
+
+
+def animal_mesh():
+    return implicit_mesh(animal_function, (-1.2, -0.35, -0.92), (1.12, 0.35, 0.72),
+                         ANIMAL_VOXEL, "animal")
+
+
+def radial_limb_rotation(pivot, direction, degrees, start, ramp, radius, axis, t_end=1.0):
+    """Flow of a 3D limb rotating by `degrees` about `axis` through `pivot`, weighted by
+    w = logistic((s - start)/ramp) * exp(-(r/radius)^4), s the distance along `direction` from
+    the pivot and r the distance from that line: a cylinder about the limb, so that other limbs
+    beside it (any side) stay still. As limb_rotation, w is evaluated in the frame rotated back
+    by the angle reached at time t (the limb beyond the ramp turns rigidly)."""
+    pivot = np.asarray(pivot, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    a = np.asarray(axis, dtype=float)
+    a = a / np.linalg.norm(a)
+    omega = math.radians(degrees)
+
+    def velocity(x, t):
+        back = (x - pivot) @ mea.rotation_matrix(a, -omega * t).T
+        s = back @ d
+        r = np.linalg.norm(back - s[:, None] * d, axis=1)
+        w = logistic((s - start) / ramp) * np.exp(-(r / radius) ** 4)
+        return omega * w[:, None] * np.cross(a, x - pivot)
+
+    return lambda x: rk4_flow(x, velocity, t_end=t_end)
+
+
+def animal_head_turn():
+    # the head on its neck turns 30 deg sideways (about the vertical through the neck base)
+    return radial_limb_rotation(ANIMAL_NECK, (0.22, 0.0, 0.32), 30.0, start=0.10, ramp=0.04,
+                                radius=0.45, axis=UP)
+
+
+def animal_tail_swing():
+    # the tail swings 40 deg sideways about the vertical through its root
+    return radial_limb_rotation(ANIMAL_TAIL, (-0.48, 0.0, 0.24), 40.0, start=0.06, ramp=0.03,
+                                radius=0.2, axis=UP)
+
+
+def animal_torso_twist():
+    # the torso twists about its long axis: the angle grows smoothly from -11 deg behind to
+    # +11 deg in front (22 deg between the hips and the shoulders); legs, neck and tail follow
+    # the part of the body they hang from
+    twist = math.radians(22.0)
+    x_axis = np.array([1.0, 0.0, 0.0])
+
+    def velocity(x, t):
+        w = twist * (logistic(x[:, 0] / 0.25) - 0.5)
+        return w[:, None] * np.cross(x_axis, x)
+
+    return lambda x: rk4_flow(x, velocity)
+
+
+def animal_leg_swing():
+    # Large articulated motion: the front right leg swung 90 deg forward at the shoulder, from
+    # standing to horizontal (about -y through the shoulder)
+    return radial_limb_rotation(ANIMAL_SHOULDER, (0.02, -0.01, -0.68), 90.0, start=0.14,
+                                ramp=0.035, radius=0.17, axis=(0.0, -1.0, 0.0))
+
+
+# ---------------------------------------------------------------------------------------------
 # 2D figure
 # ---------------------------------------------------------------------------------------------
 
@@ -432,6 +542,64 @@ def figure_arms_up():
     return compose(right, left)
 
 
+# Legs of pose A, right side: hip (0.08, 0.03), knee (0.13, -0.44), ankle (0.15, -0.90).
+HIP = np.array([0.08, 0.03])
+KNEE = np.array([0.13, -0.44])
+ANKLE = np.array([0.15, -0.90])
+
+
+def raise_arms(degrees):
+    """Both arms raised by `degrees` at the shoulders (outwards, mirror-symmetric), with the
+    one-sided weights of figure_articulated (the torso side of each arm stays)."""
+    right = limb_rotation(SHOULDER, HAND - SHOULDER, degrees, start=0.07, ramp=0.03,
+                          lateral=lambda l: one_sided(-0.10, 0.01, +1)(l) * window(0.3)(l))
+    left = limb_rotation(mirror(SHOULDER), mirror(HAND) - mirror(SHOULDER), -degrees, start=0.07,
+                         ramp=0.03,
+                         lateral=lambda l: one_sided(0.10, 0.01, -1)(l) * window(0.3)(l))
+    return compose(right, left)
+
+
+def spread_legs(hip_degrees, knee_degrees=0.0):
+    """Both legs swung out by `hip_degrees` at the hips (mirror-symmetric), then, if
+    `knee_degrees`, both shins turned back in by it at the (moved) knees: the inner side of
+    each leg (towards the other) is cut off."""
+    maps = []
+    for side in (+1, -1):
+        flip = (lambda p: p) if side > 0 else mirror
+        hip, knee, ankle = flip(HIP), flip(KNEE), flip(ANKLE)
+        swing = limb_rotation(hip, knee - hip, side * hip_degrees, start=0.10, ramp=0.03,
+                              lateral=lambda l, s=side: one_sided(-s * 0.10, 0.012, s)(l)
+                              * window(0.22)(l))
+        maps.append(swing)
+        if knee_degrees:
+            k, a = swing(knee[None, :])[0], swing(ankle[None, :])[0]
+            maps.append(limb_rotation(k, a - k, -side * knee_degrees, start=0.02, ramp=0.025,
+                                      lateral=lambda l, s=side: one_sided(-s * 0.09, 0.012, s)(l)
+                                      * window(0.25)(l)))
+    return compose(*maps)
+
+
+def figure_arms_horizontal():
+    # Large articulated motion: both arms raised 90 deg, from hanging to horizontal
+    return raise_arms(90.0)
+
+
+def figure_legs_spread():
+    # Large articulated motion: both legs swung out 25 deg at the hips
+    return spread_legs(25.0)
+
+
+def figure_knees_bent():
+    # Large articulated motion: thighs out 22 deg at the hips, shins back in 40 deg at the
+    # knees (a frontal squat, knees apart)
+    return spread_legs(22.0, 40.0)
+
+
+def figure_star():
+    # Large articulated motion (a star jump): arms raised 90 deg and legs spread 20 deg
+    return compose(raise_arms(90.0), spread_legs(20.0))
+
+
 def figure_swirl():
     arm_r = HAND - SHOULDER
     arm_l = mirror(HAND) - mirror(SHOULDER)
@@ -483,35 +651,82 @@ def figure_stretch():
 # ---------------------------------------------------------------------------------------------
 
 PAIRS = {
-    "creature_articulated": (3, creature_articulated,
+    "creature_articulated": (3, "creature", creature_articulated,
                              "creature: arm 0 curled up 32 deg, arm 2 down 25 deg, arm 3 swung "
                              "22 deg in the plane, each about a joint 0.33 from the centre with a "
                              "smooth weight along the arm (skeleton-driven smooth flow)"),
-    "creature_arm_up": (3, creature_arm_up,
+    "creature_arm_up": (3, "creature", creature_arm_up,
                         "creature: arm 0 raised 100 deg out of the plane (past the vertical) "
                         "about a joint 0.33 from the centre (large articulated motion)"),
-    "creature_swirl": (3, creature_swirl,
+    "creature_swirl": (3, "creature", creature_swirl,
                        "creature: arm 1 twisted about its axis (up to 50 deg at the tip), a "
                        "pinwheel swirl about z by 16 rho^2 deg (14 deg at the arms' ends), and a "
                        "cupping bend z += 0.14 rho^2"),
-    "creature_stretch": (3, creature_stretch,
+    "creature_stretch": (3, "creature", creature_stretch,
                          "creature: anisotropic stretch about 1.15 x 0.9 x 1.0 (rate +-25 % "
                          "smooth variation), then a 6 deg rotation and a translation "
                          "(0.06, -0.04, 0.03)"),
-    "figure_articulated": (2, figure_articulated,
+    "figure_articulated": (2, "figure", figure_articulated,
                            "figure: right arm raised 30 deg at the shoulder, left forearm "
                            "turned out 30 deg at the elbow, smooth weight along each limb "
                            "(skeleton-driven smooth flow)"),
-    "figure_arms_up": (2, figure_arms_up,
+    "figure_arms_up": (2, "figure", figure_arms_up,
                        "figure: both arms raised 60 deg at the shoulders, from hanging at the "
                        "sides to about horizontal (large articulated motion)"),
-    "figure_swirl": (2, figure_swirl,
+    "figure_swirl": (2, "figure", figure_swirl,
                      "figure: both arms curled up (angle growing along the arm to about 35 "
                      "deg), a swirl about the chest growing to 12 deg, a sideways bend "
                      "x += 0.12 (y - 0.1)^2"),
-    "figure_stretch": (2, figure_stretch,
+    "figure_stretch": (2, "figure", figure_stretch,
                        "figure: anisotropic stretch about 1.15 x 0.9 (rate +-25 % smooth "
                        "variation), then a 5 deg rotation and a translation (0.04, -0.03)"),
+    "animal_head_turn": (3, "animal", animal_head_turn,
+                         "animal: the head on its neck turned 30 deg sideways about the vertical "
+                         "through the neck's base (skeleton-driven smooth flow)"),
+    "animal_tail_swing": (3, "animal", animal_tail_swing,
+                          "animal: the tail swung 40 deg sideways about the vertical through its "
+                          "root"),
+    "animal_torso_twist": (3, "animal", animal_torso_twist,
+                           "animal: the torso twisted about its long axis, -11 deg at the hips "
+                           "to +11 deg at the shoulders, legs, neck and tail following"),
+    "animal_leg_swing": (3, "animal", animal_leg_swing,
+                         "animal: the front right leg swung 90 deg forward at the shoulder, "
+                         "from standing to horizontal (large articulated motion)"),
+    "figure_arms_horizontal": (2, "figure", figure_arms_horizontal,
+                               "figure: both arms raised 90 deg at the shoulders, from hanging "
+                               "to horizontal (large articulated motion)"),
+    "figure_legs_spread": (2, "figure", figure_legs_spread,
+                           "figure: both legs swung out 25 deg at the hips (large articulated "
+                           "motion)"),
+    "figure_knees_bent": (2, "figure", figure_knees_bent,
+                          "figure: thighs out 22 deg at the hips, shins back in 40 deg at the "
+                          "knees, a frontal squat (large articulated motion)"),
+    "figure_star": (2, "figure", figure_star,
+                    "figure: a star jump, arms raised 90 deg and legs spread 20 deg (large "
+                    "articulated motion)"),
+}
+
+
+SHAPES_3D = {"creature": creature_mesh, "animal": animal_mesh}
+
+# What each pair tests (pair.json "kind"; the correspondence issue's goals differ by kind):
+# near-isometric articulated or bending motion, large articulated motion (a limb swung 60 deg
+# or more), or a stretch (not isometric).
+LARGE_MOTION = ("creature_arm_up", "figure_arms_up", "animal_leg_swing", "figure_arms_horizontal",
+                "figure_legs_spread", "figure_knees_bent", "figure_star")
+STRETCH = ("creature_stretch", "figure_stretch")
+
+
+def kind_of(name):
+    return ("large motion" if name in LARGE_MOTION else
+            "stretch" if name in STRETCH else "near-isometric")
+
+
+# Named sets for --list and the benchmarks' --pairs: "speed", the eight pairs of the speed
+# issue's accuracy benchmark (a creature and a figure, four motions each); "all".
+SETS = {
+    "speed": ("creature_articulated", "creature_arm_up", "creature_swirl", "creature_stretch",
+              "figure_articulated", "figure_arms_up", "figure_swirl", "figure_stretch"),
 }
 
 
@@ -594,13 +809,10 @@ def write_landmarks(path, points):
 
 
 def make_pair(name, out_dir, shapes):
-    dim, make_g, description = PAIRS[name]
+    dim, shape, make_g, description = PAIRS[name]
     t0 = time.time()
     g = make_g()
-    if dim == 3:
-        points, tris = shapes["creature"]
-    else:
-        points, tris = shapes["figure"], None
+    points, tris = shapes[shape]
     target = np.round(g(points), DECIMALS)
     det_vertices = min_jacobian(g, points)
     det_grid = min_jacobian(g, probe_grid(points, JACOBIAN_GRID[0 if dim == 3 else 1]))
@@ -648,6 +860,8 @@ def make_pair(name, out_dir, shapes):
     pair = {
         "name": name,
         "dimension": dim,
+        "shape": shape,
+        "kind": kind_of(name),
         "description": description,
         "vertices": int(len(points)),
         "elements": int(len(tris)) if dim == 3 else int(len(points)),
@@ -673,9 +887,14 @@ def make_pair(name, out_dir, shapes):
 
 def main():
     args = sys.argv[1:]
-    usage = "usage: make_pairs.py OUTDIR [--only NAME[,NAME...]] [--list]"
+    usage = "usage: make_pairs.py OUTDIR [--only NAME[,NAME...]] | --list [all|speed]"
     if "--list" in args:
-        print("\n".join(PAIRS))
+        at = args.index("--list")
+        which = args[at + 1] if at + 1 < len(args) else "all"
+        if which != "all" and which not in SETS:
+            sys.exit("make_pairs.py: unknown set %s; choose from all, %s"
+                     % (which, ", ".join(SETS)))
+        print("\n".join(PAIRS if which == "all" else SETS[which]))
         return
     selected = list(PAIRS)
     if "--only" in args:
@@ -693,22 +912,23 @@ def main():
     out_dir = args[0]
     os.makedirs(out_dir, exist_ok=True)
     shapes = {}
-    if any(PAIRS[s][0] == 3 for s in selected):
+    for shape in sorted({PAIRS[s][1] for s in selected}):
         t0 = time.time()
-        points, tris = creature_mesh()
-        check_closed_oriented(points, tris, "creature")
+        if shape == "figure":
+            poly = figure_polyline()
+            if mea.signed_area(poly) <= 0.0 or not mea.is_simple(poly):
+                raise RuntimeError("figure: not counter-clockwise or not simple")
+            shapes[shape] = (poly, None)
+            continue
+        points, tris = SHAPES_3D[shape]()
+        check_closed_oriented(points, tris, shape)
         crossings, tested = self_intersections(points, tris)
         if crossings:
-            raise RuntimeError("creature: mesh intersects itself (%d crossings)" % crossings)
-        shapes["creature"] = (points, tris)
-        print("creature: %d vertices, %d triangles, closed, outward, no self-intersection "
-              "(%d edge-triangle pairs tested), %.1fs" % (len(points), len(tris), tested,
+            raise RuntimeError("%s: mesh intersects itself (%d crossings)" % (shape, crossings))
+        shapes[shape] = (points, tris)
+        print("%s: %d vertices, %d triangles, closed, outward, no self-intersection "
+              "(%d edge-triangle pairs tested), %.1fs" % (shape, len(points), len(tris), tested,
                                                          time.time() - t0))
-    if any(PAIRS[s][0] == 2 for s in selected):
-        poly = figure_polyline()
-        if mea.signed_area(poly) <= 0.0 or not mea.is_simple(poly):
-            raise RuntimeError("figure: not counter-clockwise or not simple")
-        shapes["figure"] = poly
     for name in selected:
         make_pair(name, out_dir, shapes)
 
