@@ -118,6 +118,7 @@ MatchOptions::defaults(int dim)
     MatchOptions opts = paper(dim);
     opts.multiscale.surfaceTolerance =
         dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
+    opts.multiscale.coarseMembraneFactor = DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR;
     return opts;
 }
 

@@ -424,9 +424,10 @@ def animal_mesh():
                          ANIMAL_VOXEL, "animal")
 
 
-def radial_limb_rotation(pivot, direction, degrees, start, ramp, radius, axis, t_end=1.0):
+def radial_limb_rotation(pivot, direction, degrees, start, ramp, radius, axis, power=4,
+                         t_end=1.0):
     """Flow of a 3D limb rotating by `degrees` about `axis` through `pivot`, weighted by
-    w = logistic((s - start)/ramp) * exp(-(r/radius)^4), s the distance along `direction` from
+    w = logistic((s - start)/ramp) * exp(-(r/radius)^power), s the distance along `direction` from
     the pivot and r the distance from that line: a cylinder about the limb, so that other limbs
     beside it (any side) stay still. As limb_rotation, w is evaluated in the frame rotated back
     by the angle reached at time t (the limb beyond the ramp turns rigidly)."""
@@ -441,7 +442,7 @@ def radial_limb_rotation(pivot, direction, degrees, start, ramp, radius, axis, t
         back = (x - pivot) @ mea.rotation_matrix(a, -omega * t).T
         s = back @ d
         r = np.linalg.norm(back - s[:, None] * d, axis=1)
-        w = logistic((s - start) / ramp) * np.exp(-(r / radius) ** 4)
+        w = logistic((s - start) / ramp) * np.exp(-(r / radius) ** power)
         return omega * w[:, None] * np.cross(a, x - pivot)
 
     return lambda x: rk4_flow(x, velocity, t_end=t_end)
@@ -475,9 +476,11 @@ def animal_torso_twist():
 
 def animal_leg_swing():
     # Large articulated motion: the front right leg swung 90 deg forward at the shoulder, from
-    # standing to horizontal (about -y through the shoulder)
-    return radial_limb_rotation(ANIMAL_SHOULDER, (0.02, -0.01, -0.68), 90.0, start=0.14,
-                                ramp=0.035, radius=0.17, axis=(0.0, -1.0, 0.0))
+    # standing to horizontal (about -y through the shoulder). The weight is flat across the leg
+    # (radius 0.2, power 8: > 99% on its surface, 0.11 from its axis; nil at the other legs) and
+    # starts below the belly (s > 0.2), so that the whole leg turns and does not lag into a fan.
+    return radial_limb_rotation(ANIMAL_SHOULDER, (0.02, -0.01, -0.68), 90.0, start=0.2,
+                                ramp=0.03, radius=0.2, axis=(0.0, -1.0, 0.0), power=8)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -548,40 +551,48 @@ KNEE = np.array([0.13, -0.44])
 ANKLE = np.array([0.15, -0.90])
 
 
-def raise_arms(degrees):
-    """Both arms raised by `degrees` at the shoulders (outwards, mirror-symmetric), with the
-    one-sided weights of figure_articulated (the torso side of each arm stays)."""
+def raise_arms(degrees, cut=0.10, width=0.01):
+    """Both arms raised by `degrees` at the shoulders (outwards, mirror-symmetric). The torso side
+    of each arm stays: the weight is cut off at lateral distance `cut` from the arm's axis,
+    over `width` (the arm's inner surface is at about 0.07). figure_arms_up keeps the soft cut of
+    figure_articulated (width 0.01: the arm's inner surface turns at ~95% of the rate, lags, and
+    the skin between arm and torso is drawn into a flap); the sharp cut (0.004) turns the whole
+    arm (> 99%) and shears the gap between arm and torso instead."""
     right = limb_rotation(SHOULDER, HAND - SHOULDER, degrees, start=0.07, ramp=0.03,
-                          lateral=lambda l: one_sided(-0.10, 0.01, +1)(l) * window(0.3)(l))
+                          lateral=lambda l: one_sided(-cut, width, +1)(l) * window(0.3)(l))
     left = limb_rotation(mirror(SHOULDER), mirror(HAND) - mirror(SHOULDER), -degrees, start=0.07,
                          ramp=0.03,
-                         lateral=lambda l: one_sided(0.10, 0.01, -1)(l) * window(0.3)(l))
+                         lateral=lambda l: one_sided(cut, width, -1)(l) * window(0.3)(l))
     return compose(right, left)
+
+
+SHARP_CUT = 0.004  # width of the one-sided weights of the large-motion figure pairs
 
 
 def spread_legs(hip_degrees, knee_degrees=0.0):
     """Both legs swung out by `hip_degrees` at the hips (mirror-symmetric), then, if
-    `knee_degrees`, both shins turned back in by it at the (moved) knees: the inner side of
-    each leg (towards the other) is cut off."""
+    `knee_degrees`, both shins turned back in by it at the (moved) knees. The weight is cut off
+    sharply (SHARP_CUT) in the gap between the legs (the leg's inner surface is at ~0.09 from its
+    axis, the other leg at ~0.12), so that each leg turns whole."""
     maps = []
     for side in (+1, -1):
         flip = (lambda p: p) if side > 0 else mirror
         hip, knee, ankle = flip(HIP), flip(KNEE), flip(ANKLE)
         swing = limb_rotation(hip, knee - hip, side * hip_degrees, start=0.10, ramp=0.03,
-                              lateral=lambda l, s=side: one_sided(-s * 0.10, 0.012, s)(l)
+                              lateral=lambda l, s=side: one_sided(-s * 0.105, SHARP_CUT, s)(l)
                               * window(0.22)(l))
         maps.append(swing)
         if knee_degrees:
             k, a = swing(knee[None, :])[0], swing(ankle[None, :])[0]
-            maps.append(limb_rotation(k, a - k, -side * knee_degrees, start=0.02, ramp=0.025,
-                                      lateral=lambda l, s=side: one_sided(-s * 0.09, 0.012, s)(l)
-                                      * window(0.25)(l)))
+            maps.append(limb_rotation(
+                k, a - k, -side * knee_degrees, start=0.02, ramp=0.025,
+                lateral=lambda l, s=side: one_sided(-s * 0.11, SHARP_CUT, s)(l) * window(0.25)(l)))
     return compose(*maps)
 
 
 def figure_arms_horizontal():
     # Large articulated motion: both arms raised 90 deg, from hanging to horizontal
-    return raise_arms(90.0)
+    return raise_arms(90.0, width=SHARP_CUT)
 
 
 def figure_legs_spread():
@@ -597,7 +608,7 @@ def figure_knees_bent():
 
 def figure_star():
     # Large articulated motion (a star jump): arms raised 90 deg and legs spread 20 deg
-    return compose(raise_arms(90.0), spread_legs(20.0))
+    return compose(raise_arms(90.0, width=SHARP_CUT), spread_legs(20.0))
 
 
 def figure_swirl():

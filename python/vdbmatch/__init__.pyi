@@ -59,6 +59,7 @@ def match(
     energy: str | None = None,
     c_match: float | None = None,
     c_mem: float | None = None,
+    coarse_membrane_factor: float | None = None,
     c_bend: float | None = None,
     c_vol: float | None = None,
     q: float | None = None,

@@ -305,6 +305,41 @@ TEST(Descent, CircleToEllipseAdaptive2D)
     EXPECT_LT(meanResidual[1], 2 * meanResidual[0] + 0.02 / 64);
 }
 
+TEST(Descent, CoarseMembraneFactorWeighsTheMembraneBelowTheFinestLevelOnly)
+{
+    // No descent steps: every level reports its terms at the prolongated identity, so the two
+    // runs see the same deformations and differ only in the weights (MultiscaleOptions::energyAt).
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    opts.minLevel = 4;
+    opts.maxLevel = 6;
+    opts.descent.maxIterations = 0;
+    Problem<2> problem(opts.energy);
+    const auto run = [&](Real factor) {
+        MultiscaleOptions o = opts;
+        o.coarseMembraneFactor = factor;
+        return MultiscaleDriver<2>(o).run(problem.denseLevels());
+    };
+    const MultiscaleResult<2> paper = run(1), stiff = run(3);
+    ASSERT_EQ(paper.reports.size(), 3u);
+    ASSERT_EQ(stiff.reports.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+        const EnergyTerms &a = paper.reports[i].terms, &b = stiff.reports[i].terms;
+        const Real scale = i + 1 < 3 ? 3.0 : 1.0; // levels 4 and 5: 3 c_mem; level 6: c_mem
+        for (int k = 0; k < 2; ++k) {
+            ASSERT_GT(a.mem[k], 0.0);
+            EXPECT_NEAR(b.mem[k], scale * a.mem[k], 1e-12 * b.mem[k]) << i;
+            EXPECT_EQ(b.match[k], a.match[k]) << i;
+            EXPECT_EQ(b.bend[k], a.bend[k]) << i;
+            EXPECT_EQ(b.vol[k], a.vol[k]) << i;
+        }
+    }
+    EXPECT_EQ(opts.energyAt(6).cMem, opts.energy.cMem);
+    opts.coarseMembraneFactor = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.coarseMembraneFactor = std::numeric_limits<Real>::infinity();
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, InterrupterStopsTheRun)
 {
     MultiscaleOptions opts = MultiscaleOptions::defaults(2);

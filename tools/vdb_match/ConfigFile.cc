@@ -22,6 +22,7 @@ configKeys()
         {"energy", "--energy"},
         {"cMatch", "--c-match"},
         {"cMem", "--c-mem"},
+        {"coarseMembraneFactor", "--coarse-membrane-factor"},
         {"cBend", "--c-bend"},
         {"cVol", "--c-vol"},
         {"q", "--q"},

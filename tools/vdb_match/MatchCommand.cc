@@ -64,6 +64,7 @@ struct MatchCliOptions
     std::string grid, sourceGrid, targetGrid;
     std::optional<int> minLevel, maxLevel;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
+    std::optional<double> coarseMembraneFactor; ///< default per preset (MatchOptions)
     double tau = EnergyParameters().tau;
     std::string preset = "default"; ///< --preset: "default" or "paper" (MatchOptions::paper)
     EnergyKind kind = EnergyKind::Symmetric;
@@ -194,7 +195,8 @@ matchOptionTable()
          [](O& o, const std::string& v) { o.refinementMargin = parseDouble("--refine-margin", v); }},
         {"--preset", "NAME", "Energy (paper tab:parameters)",
          "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
-         "our additions that change the result (no surface test, no landmarks unless given); "
+         "our additions that change the result (no surface test, one c_mem at every level, no "
+         "landmarks unless given); "
          "options given override it (default: default)",
          [](O& o, const std::string& v) {
              if (v != "default" && v != "paper")
@@ -217,6 +219,14 @@ matchOptionTable()
          "weight of the membrane term (default " + both(p3.cMem, p2.cMem) + ")" +
              "\npaper: c_mem, eq:EsymMem",
          [](O& o, const std::string& v) { o.cMem = parseDouble("--c-mem", v); }},
+        {"--coarse-membrane-factor", "F", "Energy (paper tab:parameters)",
+         "an addition to the paper: the levels below the finest weigh the membrane term by F "
+         "c_mem, the finest level by c_mem (default " +
+             formatNumber(DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR) +
+             "; --preset paper: 1, the paper's single c_mem)",
+         [](O& o, const std::string& v) {
+             o.coarseMembraneFactor = parseDouble("--coarse-membrane-factor", v);
+         }},
         {"--c-bend", "X", "Energy (paper tab:parameters)",
          "weight of the bending term (default " + both(p3.cBend, p2.cBend) + ")" +
              "\npaper: c_bend, eq:EsymBend",
@@ -648,6 +658,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params["preset"] = o.preset;
     params["energy"] = toString(opts.multiscale.kind);
     params.update(energyParametersJson(p));
+    params["coarseMembraneFactor"] = opts.multiscale.coarseMembraneFactor;
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
@@ -750,6 +761,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     EnergyParameters& p = opts.multiscale.energy;
     if (o.cMatch) p.cMatch = *o.cMatch;
     if (o.cMem) p.cMem = *o.cMem;
+    if (o.coarseMembraneFactor) opts.multiscale.coarseMembraneFactor = *o.coarseMembraneFactor;
     if (o.cBend) p.cBend = *o.cBend;
     if (o.cVol) p.cVol = *o.cVol;
     if (o.q) p.q = *o.q;
@@ -937,6 +949,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     }
     deformation->insertMeta("vdbmatch_c_match", openvdb::DoubleMetadata(p.cMatch));
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
+    deformation->insertMeta("vdbmatch_coarse_membrane_factor",
+                            openvdb::DoubleMetadata(opts.multiscale.coarseMembraneFactor));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
     deformation->insertMeta("vdbmatch_c_vol", openvdb::DoubleMetadata(p.cVol));
     deformation->insertMeta("vdbmatch_q", openvdb::DoubleMetadata(p.q));

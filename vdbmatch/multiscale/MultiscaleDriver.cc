@@ -43,12 +43,24 @@ MultiscaleOptions::validate() const
     if (surfaceLevels < 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: surfaceLevels must be >= 0, got " << surfaceLevels);
+    if (!(coarseMembraneFactor >= 0 && coarseMembraneFactor <= MAX_COEFFICIENT))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: coarseMembraneFactor must be finite and in [0, "
+                          << MAX_COEFFICIENT << "], got " << coarseMembraneFactor);
     if (!(metric.cgTolerance > 0 && metric.cgTolerance < 1))
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: the metric tolerance must be in (0, 1), got "
                           << metric.cgTolerance);
     energy.validate();
     descent.validate();
+}
+
+EnergyParameters
+MultiscaleOptions::energyAt(int level) const
+{
+    EnergyParameters p = energy;
+    if (level < maxLevel) p.cMem *= coarseMembraneFactor;
+    return p;
 }
 
 template <int D>
@@ -111,7 +123,7 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         // ones up to rounding when the lattice nests in the previous one).
         in.lattice->expand(u);
 
-        Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energy, mOpts.kind);
+        Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energyAt(l), mOpts.kind);
         std::optional<energy::LandmarkTerm<D>> landmarks;
         if (in.landmarks && !in.landmarks->source.empty()) {
             landmarks.emplace(*in.lattice, *in.landmarks);

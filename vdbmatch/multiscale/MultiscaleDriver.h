@@ -98,6 +98,16 @@ struct MultiscaleOptions
     /// Number of finest levels at which the surface test applies (>= 0). The coarse levels set
     /// the correspondence through slow tangential motion and must run to the energy test.
     int surfaceLevels = 1;
+    /// Membrane weight below the finest level, an addition to the paper (which uses one c_mem):
+    /// levels l < maxLevel use coarseMembraneFactor * energy.cMem in eq:EsymMem, the finest level
+    /// energy.cMem (finite, in [0, MAX_COEFFICIENT]; 1: the paper). The coarse levels set the
+    /// tangential correspondence (docs/performance.md); a stiffer membrane keeps it near
+    /// isometric there, and the finest level, with the paper's weight, can still stretch.
+    Real coarseMembraneFactor = 1;
+
+    /// The energy coefficients at level l: `energy`, with c_mem scaled by coarseMembraneFactor
+    /// below the finest level.
+    EnergyParameters energyAt(int level) const;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
     static MultiscaleOptions defaults(int dim);
