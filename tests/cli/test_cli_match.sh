@@ -215,7 +215,7 @@ assert default["preset"] == "default" and default["surfaceTolerance"] > 0, defau
 # tab:parameters (3D): c_match 4.096, c_vol 0.8, c_mem 1, c_bend 0.2, q 4, theta 1
 assert (paper["cMatch"], paper["cVol"], paper["cMem"], paper["cBend"], paper["q"], paper["theta"]) == (4.096, 0.8, 1, 0.2, 4, 1), paper
 # the paper has one c_mem; the default stiffens the membrane below the finest level (an addition)
-assert paper["coarseMembraneFactor"] == 1 and default["coarseMembraneFactor"] == 4, (paper, default)
+assert paper["coarseMembraneFactor"] == 1 and default["coarseMembraneFactor"] == 3, (paper, default)
 assert default["cMem"] == 1, default
 PY
 check coarse-membrane-factor-range 3 '' 'coarseMembraneFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor -1 --quiet
