@@ -3,7 +3,7 @@
 # same pair at the same resolution, in one run, side by side.
 #
 # Usage: bench/compare_elastix.sh [--vdb-match PATH] --pair DIR [--level L] [--out DIR]
-#                                 [--threads N] [--vdbmatch-args "..."]
+#                                 [--threads N] [--vdbmatch-args "..."] [--tsv FILE]
 #
 # DIR holds source.obj, target.obj (closed 3D triangle meshes, world units), truth.xyz (one line
 # "x y z" per vertex of source.obj: the ground-truth image g(v), world units) and optionally
@@ -33,7 +33,9 @@
 # counted. The ratio printed is vdb_match wall / elastix wall (< 1: vdb_match is faster).
 #
 # Installs elastix and GNU time with apt-get if missing (sudo when not root).
-# Temporary files are removed unless --out is given.
+# Temporary files are removed unless --out is given. --tsv FILE appends the elastix row in the
+# format of bench/compare_peers.sh's peers.tsv (pair, dim, peer, err_mean, err_p95, motion_mean,
+# wall_s, peak_mb; unit-box lengths), for bench/accuracy/correspondence_table.py --peers.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -48,6 +50,7 @@ LEVEL=7
 OUT=""
 THREADS=2
 VDBMATCH_ARGS=""
+TSV=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --vdb-match) VDB_MATCH=${2:?}; shift 2 ;;
@@ -62,6 +65,8 @@ while [ $# -gt 0 ]; do
     --threads=*) THREADS=${1#*=}; shift ;;
     --vdbmatch-args) VDBMATCH_ARGS=${2?}; shift 2 ;;
     --vdbmatch-args=*) VDBMATCH_ARGS=${1#*=}; shift ;;
+    --tsv) TSV=${2:?}; shift 2 ;;
+    --tsv=*) TSV=${1#*=}; shift ;;
     -h|--help) usage ;;
     *) echo "compare_elastix.sh: unknown argument '$1'" >&2; usage ;;
   esac
@@ -277,6 +282,7 @@ import json, re, sys
 import numpy as np
 
 pair, work, level, sdfSeconds = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
+tsv = sys.argv[5] if len(sys.argv) > 5 else ""
 report = json.load(open(f"{work}/vdb_match/report.json"))
 origin = np.array(report["placement"]["worldOrigin"], float)
 scale = float(report["placement"]["scale"])
@@ -367,6 +373,20 @@ print(f"  vdb_match's own exact residual (report.json): mean {r['residual']['mea
 print(f"  for reference, phi = Id: |v - g(v)| mean {idId.mean():.3e}, residual mean "
       f"{np.abs(trilinear(d2, source)).mean():.3e}")
 print(f"vdb_match status: {report['status']}; elastix time excludes building the SDF volumes ({sdfSeconds:.1f} s)")
+if tsv:
+    import os
+    name = os.path.basename(os.path.normpath(pair))
+    try:
+        name = json.load(open(f"{pair}/pair.json"))["name"]
+    except (OSError, KeyError, ValueError):
+        pass
+    err = rows["elastix"]["err"]
+    new = not os.path.exists(tsv)
+    with open(tsv, "a") as f:
+        if new:
+            f.write("pair\tdim\tpeer\terr_mean\terr_p95\tmotion_mean\twall_s\tpeak_mb\n")
+        f.write(f"{name}\t3\telastix\t{err.mean():.6g}\t{np.percentile(err, 95):.6g}\t"
+                f"{idId.mean():.6g}\t{wallE:.1f}\t{memE:.0f}\n")
 PY
-"$PYTHON" "$WORK/evaluate.py" "$PAIR" "$WORK" "$LEVEL" "$SDF_SECONDS"
+"$PYTHON" "$WORK/evaluate.py" "$PAIR" "$WORK" "$LEVEL" "$SDF_SECONDS" "$TSV"
 [ -z "$OUT" ] || echo "outputs kept in $WORK"

@@ -79,7 +79,7 @@ PY
 
 # score PAIRDIR TARGET PHI_FILE PEER WALL RSS_KB: prints and appends one row.
 score() {
-  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$@" "$OUT/results.tsv" <<'PY'
+  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$@" "$OUT/peers.tsv" <<'PY'
 import json, os, sys
 import numpy as np
 pair_dir, target, phi_file, peer, wall, rss, tsv = sys.argv[1:8]
@@ -109,7 +109,7 @@ with open(tsv, "a") as f:
 PY
 }
 
-rm -f "$OUT/results.tsv"
+rm -f "$OUT/peers.tsv"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 printf '%-21s %-5s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
 for p in "${PAIR_LIST[@]}"; do
@@ -141,4 +141,4 @@ for p in "${PAIR_LIST[@]}"; do
     fi
   fi
 done
-[ $KEEP = 0 ] || echo "results: $OUT/results.tsv"
+[ $KEEP = 0 ] || echo "results: $OUT/peers.tsv"

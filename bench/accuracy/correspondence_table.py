@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
 """The correspondence table of docs/results.md from benchmark outputs: mean |phi(v) - g(v)| over
 the source's vertices (x 1e-3 of the unit box) per pair, for one or more vdb_match runs
-(bench/bench_accuracy.sh results.tsv) and the peers (bench/compare_peers.sh and
-bench/compare_elastix.sh results.tsv), with the correspondence issue's goal per pair kind
+(bench/bench_accuracy.sh results.tsv) and the peers (bench/compare_peers.sh peers.tsv,
+bench/compare_elastix.sh --tsv), with the correspondence issue's goal per pair kind
 (make_pairs.py pair.json "kind"):
   near-isometric  vdb_match at or below the best peer on the pair
   large motion    vdb_match at or below 0.25 x the mean motion |g(v) - v|
@@ -10,7 +10,7 @@ bench/compare_elastix.sh results.tsv), with the correspondence issue's goal per 
 
 Usage:
   correspondence_table.py --pairs-dir DIR/pairs [--vdbmatch LABEL=RESULTS.tsv ...]
-                          [--peers RESULTS.tsv ...] [--energy symmetric] [--goal LABEL]
+                          [--peers PEERS.tsv ...] [--energy symmetric] [--goal LABEL]
 --vdbmatch may be repeated (columns in that order); the goal is judged on --goal (default the
 first). Rows follow the order of the first vdb_match file. Prints Markdown.
 """
