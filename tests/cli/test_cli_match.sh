@@ -144,17 +144,18 @@ else
     fail "config-command-line-wins"
 fi
 # A report.json of a version before the surface test (no surfaceTolerance) reproduces its run
-# with the test off, whatever today's default.
+# with the test off, and one before the coarse membrane factor with one c_mem, whatever today's
+# defaults.
 "$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-for k in ("surfaceTolerance", "surfaceLevels"):
+for k in ("surfaceTolerance", "surfaceLevels", "coarseMembraneFactor"):
     r["parameters"].pop(k, None)
 json.dump(r, open(sys.argv[2], "w"))
 PY
 check config-old-report 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old" --config "$SCRATCH/old_report.json" --levels 3..3 --quiet
 count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 else 1)' "$SCRATCH/m3old/report.json"; then
     echo "ok   config-old-report-surface-off"
 else
     fail "config-old-report-surface-off"

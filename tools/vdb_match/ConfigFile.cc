@@ -112,6 +112,12 @@ parseConfig(const std::string& text, const std::string& path)
         !params.contains("surfaceTolerance")) {
         settings.push_back({"surfaceTolerance", "--surface-tolerance", "0"});
     }
+    // Likewise a report.json of a version before the coarse membrane factor (energy
+    // coefficients but no coarseMembraneFactor) used one c_mem at every level.
+    if (doc.contains("parameters") && params.contains("cMem") &&
+        !params.contains("coarseMembraneFactor")) {
+        settings.push_back({"coarseMembraneFactor", "--coarse-membrane-factor", "1"});
+    }
     return settings;
 }
 
