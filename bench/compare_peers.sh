@@ -4,6 +4,15 @@
 # (github.com/yaoyx689/AMM_NRR), each run as its users would, against the same known maps g as
 # bench/bench_accuracy.sh. Neither is packaged: build them yourself from their public sources
 # and give their binaries' paths; a peer without a path is skipped with a message. Not in CI.
+# How they were built for docs/results.md (2026-11-26, Debian 12; their licences are theirs:
+# AMM_NRR's README restricts it to research use):
+#   apt-get install -y libopenblas-dev libopenmesh-dev   # then reset the BLAS alternative if
+#       # you want reference BLAS back: update-alternatives --config libblas.so.3-x86_64-linux-gnu
+#   BCPD (ohirose/bcpd daec198): make in the repository root -> ./bcpd (gcc -O3 -fopenmp, OpenBLAS)
+#   AMM_NRR (yaoyx689/AMM_NRR 3621366): cmake -DCMAKE_BUILD_TYPE=Release .. && cmake --build .
+#       -> build/AMM_NRR (bundled nanoflann, system Eigen and OpenMesh)
+# Set OMP_NUM_THREADS (and OPENBLAS_NUM_THREADS for BCPD) to compare at equal cores. AMM_NRR exits
+# 0 even when it cannot write its result; the score step fails on the missing file instead.
 #
 # Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--out DIR]
 #   --pairs  names, or a set: all (default; make_pairs.py --list) or speed
