@@ -78,6 +78,7 @@ def match(
     metric_tau: float | None = None,
     optimizer: str | None = None,
     initial_step: str | None = None,
+    trial_growth: float | None = None,
     metric_tolerance: float | None = None,
     strict: bool | None = None,
     threads: int | None = None,

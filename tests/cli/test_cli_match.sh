@@ -221,6 +221,14 @@ assert default["cMem"] == 1, default
 PY
 check coarse-membrane-factor-range 3 '' 'coarseMembraneFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor -1 --quiet
 check coarse-membrane-factor-number 1 '' "--coarse-membrane-factor expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor x --quiet
+check trial-growth-range 3 '' 'grow must be finite and >= 1' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --trial-growth 0.5 --quiet
+check trial-growth 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/tg" --levels 3..4 --trial-growth 1.5 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; q = json.load(open(sys.argv[2]))["parameters"]; sys.exit(0 if p["trialGrowth"] == 1.5 and q["trialGrowth"] == 2 else 1)' "$SCRATCH/tg/report.json" "$SCRATCH/m3/report.json"; then
+    echo "ok   trial-growth-report"
+else
+    fail "trial-growth-report"
+fi
 
 # ---------------------------------------------------------------- landmarks (an addition to the paper)
 if [ -f "$FIGURE_A" ] && [ -f "$FIGURE_B" ]; then

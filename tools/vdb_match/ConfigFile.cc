@@ -36,6 +36,7 @@ configKeys()
         {"metricTauFactor", "--metric-tau"},
         {"optimizer", "--optimizer"},
         {"initialStep", "--initial-step"},
+        {"trialGrowth", "--trial-growth"},
         {"metricTolerance", "--metric-tolerance"},
         {"maxIterations", "--max-iterations"},
         {"energyTolerance", "--energy-tolerance"},

@@ -83,6 +83,7 @@ struct MatchCliOptions
     double metricTolerance = MatchOptions::defaults(3).multiscale.metric.cgTolerance;
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
+    double trialGrowth = MatchOptions::defaults(3).multiscale.descent.lineSearch.grow;
     int deformationLevel = 0;
     std::string config;    ///< --config FILE (applied before the other options)
     std::string init;      ///< --init DEFORMATION.vdb: start from an earlier result
@@ -312,6 +313,11 @@ matchOptionTable()
              }
              o.initialStepFromSlope = v == "slope";
          }},
+        {"--trial-growth", "X", "Descent",
+         "the 'grow' rule's factor: the first trial of a line search is X times the last accepted "
+         "step (also the cap of the 'slope' rule), >= 1 (default " +
+             formatNumber(d.trialGrowth) + ")",
+         [](O& o, const std::string& v) { o.trialGrowth = parseDouble("--trial-growth", v); }},
         {"--metric-tolerance", "X", "Descent",
          "relative residual of the conjugate-gradient solve of the metric (default " +
              formatNumber(d.metricTolerance) + ")",
@@ -668,6 +674,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"metricTauFactor", opts.multiscale.metricTauFactor},
              {"optimizer", solver::toString(descent.method)},
              {"initialStep", descent.initialStepFromSlope ? "slope" : "grow"},
+             {"trialGrowth", descent.lineSearch.grow},
              {"metricTolerance", opts.multiscale.metric.cgTolerance},
              {"maxIterations", descent.maxIterations},
              {"energyTolerance", descent.energyTolerance},
@@ -784,6 +791,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.metric.cgTolerance = o.metricTolerance;
     opts.multiscale.descent.method = o.method;
     opts.multiscale.descent.initialStepFromSlope = o.initialStepFromSlope;
+    opts.multiscale.descent.lineSearch.grow = o.trialGrowth;
     opts.multiscale.descent.maxIterations = o.maxIterations;
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;
