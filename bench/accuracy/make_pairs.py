@@ -116,37 +116,41 @@ def perp2(v):
     return np.stack([-v[..., 1], v[..., 0]], axis=-1)
 
 
-def limb_rotation(pivot, direction, degrees, start, ramp, lateral, axis=None, plane_normal=None,
-                  t_end=1.0):
-    """Flow of a limb rotating by `degrees` about `pivot` (3D: about `axis`; 2D: in the plane,
-    positive = counter-clockwise). The rate is weighted by w = logistic((s - start)/ramp) *
-    L(l), s the distance along `direction` from the pivot, l the lateral coordinate
-    (2D: along perp(direction); 3D: along plane_normal x direction), L = `lateral`(l) a smooth
-    window; w is evaluated in the frame rotated back by the angle reached at time t, so the part
-    of the limb where w = 1 turns rigidly. t_end < 1: the flow stopped at that time (the motion
-    so far, for sequences: make_sequence.py)."""
+def rotation_flow(pivot, degrees, weight, axis=None, t_end=1.0):
+    """Flow of a rotation by `degrees` about `pivot` (3D: about `axis`; 2D: in the plane,
+    positive = counter-clockwise) whose rate is weighted by w = weight(back), back = x - pivot
+    rotated back by the angle reached at time t: where w = 1 the part turns rigidly. t_end < 1:
+    the flow stopped at that time (the motion so far, for sequences: make_sequence.py)."""
     pivot = np.asarray(pivot, dtype=float)
-    d = np.asarray(direction, dtype=float)
-    d = d / np.linalg.norm(d)
     omega = math.radians(degrees)
     if len(pivot) == 2:
-        lat_dir = perp2(d)
-
         def velocity(x, t):
-            back = (x - pivot) @ rot2(-omega * t).T
-            w = logistic((back @ d - start) / ramp) * lateral(back @ lat_dir)
+            w = weight((x - pivot) @ rot2(-omega * t).T)
             return omega * w[:, None] * perp2(x - pivot)
     else:
         a = np.asarray(axis, dtype=float)
         a = a / np.linalg.norm(a)
-        lat_dir = np.cross(plane_normal, d)
 
         def velocity(x, t):
-            back = (x - pivot) @ mea.rotation_matrix(a, -omega * t).T
-            w = logistic((back @ d - start) / ramp) * lateral(back @ lat_dir)
+            w = weight((x - pivot) @ mea.rotation_matrix(a, -omega * t).T)
             return omega * w[:, None] * np.cross(a, x - pivot)
 
     return lambda x: rk4_flow(x, velocity, t_end=t_end)
+
+
+def limb_rotation(pivot, direction, degrees, start, ramp, lateral, axis=None, plane_normal=None,
+                  t_end=1.0):
+    """rotation_flow of a limb, weighted by w = logistic((s - start)/ramp) * L(l), s the distance
+    along `direction` from the pivot, l the lateral coordinate (2D: along perp(direction); 3D:
+    along plane_normal x direction), L = `lateral`(l) a smooth window."""
+    d = np.asarray(direction, dtype=float)
+    d = d / np.linalg.norm(d)
+    lat_dir = perp2(d) if len(d) == 2 else np.cross(plane_normal, d)
+
+    def weight(back):
+        return logistic((back @ d - start) / ramp) * lateral(back @ lat_dir)
+
+    return rotation_flow(pivot, degrees, weight, axis, t_end)
 
 
 def window(half_width, power=4):
@@ -426,26 +430,19 @@ def animal_mesh():
 
 def radial_limb_rotation(pivot, direction, degrees, start, ramp, radius, axis, power=4,
                          t_end=1.0):
-    """Flow of a 3D limb rotating by `degrees` about `axis` through `pivot`, weighted by
+    """rotation_flow of a 3D limb about `axis` through `pivot`, weighted by
     w = logistic((s - start)/ramp) * exp(-(r/radius)^power), s the distance along `direction` from
     the pivot and r the distance from that line: a cylinder about the limb, so that other limbs
-    beside it (any side) stay still. As limb_rotation, w is evaluated in the frame rotated back
-    by the angle reached at time t (the limb beyond the ramp turns rigidly)."""
-    pivot = np.asarray(pivot, dtype=float)
+    beside it (any side) stay still."""
     d = np.asarray(direction, dtype=float)
     d = d / np.linalg.norm(d)
-    a = np.asarray(axis, dtype=float)
-    a = a / np.linalg.norm(a)
-    omega = math.radians(degrees)
 
-    def velocity(x, t):
-        back = (x - pivot) @ mea.rotation_matrix(a, -omega * t).T
+    def weight(back):
         s = back @ d
         r = np.linalg.norm(back - s[:, None] * d, axis=1)
-        w = logistic((s - start) / ramp) * np.exp(-(r / radius) ** power)
-        return omega * w[:, None] * np.cross(a, x - pivot)
+        return logistic((s - start) / ramp) * np.exp(-(r / radius) ** power)
 
-    return lambda x: rk4_flow(x, velocity, t_end=t_end)
+    return rotation_flow(pivot, degrees, weight, axis, t_end)
 
 
 def animal_head_turn():
@@ -534,15 +531,10 @@ def figure_articulated():
 
 def figure_arms_up():
     # Large articulated motion (issue: correspondence): both arms raised 60 degrees at the
-    # shoulders, from hanging at the sides to about horizontal, with the same one-sided weights
-    # as figure_articulated (the hands end bent down). At 90 degrees the skin between arm and
-    # torso is drawn out into a thin flap, not a pose.
-    right = limb_rotation(SHOULDER, HAND - SHOULDER, 60.0, start=0.07, ramp=0.03,
-                          lateral=lambda l: one_sided(-0.10, 0.01, +1)(l) * window(0.3)(l))
-    left = limb_rotation(mirror(SHOULDER), mirror(HAND) - mirror(SHOULDER), -60.0, start=0.07,
-                         ramp=0.03,
-                         lateral=lambda l: one_sided(0.10, 0.01, -1)(l) * window(0.3)(l))
-    return compose(right, left)
+    # shoulders, from hanging at the sides to about horizontal, with the soft one-sided weights
+    # of figure_articulated (raise_arms: the arms' inner sides lag into a flap; the hands end
+    # bent down).
+    return raise_arms(60.0)
 
 
 # Legs of pose A, right side: hip (0.08, 0.03), knee (0.13, -0.44), ankle (0.15, -0.90).
