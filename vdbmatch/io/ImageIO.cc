@@ -1,20 +1,16 @@
 /// @file ImageIO.cc
-/// @brief EXR and PNG writing through OpenImageIO, with atomic rename; image reading.
+/// @brief Argument checks of the picture functions, and the loader of the OpenImageIO module
+///        (ImageBackend.h) that does the work.
 #include "ImageIO.h"
 
-#include <vdbmatch/io/AtomicFile.h>
+#include <vdbmatch/io/ImageBackend.h>
 
-#include <OpenImageIO/imageio.h>
 #include <openvdb/Exceptions.h>
 
 #include <algorithm>
-#include <atomic>
-#include <fcntl.h>
+#include <dlfcn.h>
 #include <filesystem>
-#include <memory>
 #include <set>
-#include <system_error>
-#include <unistd.h>
 
 namespace vdbmatch {
 
@@ -34,29 +30,59 @@ quoted(const std::string& s)
     return "'" + s + "'";
 }
 
-/// Writes @a spec / @a data with OpenImageIO's writer for @a format ("openexr", "png") to
-/// @a path atomically (writeFileAtomicallyVia: temporary file, flush, rename).
-void
-writeAtomically(const std::string& function, const std::string& path, const std::string& format,
-                const OIIO::ImageSpec& spec, OIIO::TypeDesc dataType, const void* data)
+/// The module, or why it could not be loaded.
+struct LoadedBackend
 {
-    writeFileAtomicallyVia(
-        path,
-        [&](const std::string& temp) {
-            std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(format);
-            if (!out) {
-                throw std::runtime_error("OpenImageIO has no " + format + " writer (" +
-                                         OIIO::geterror() + ")");
-            }
-            if (!out->open(temp, spec)) throw std::runtime_error(out->geterror());
-            if (!out->write_image(dataType, data)) {
-                const std::string error = out->geterror();
-                out->close();
-                throw std::runtime_error(error);
-            }
-            if (!out->close()) throw std::runtime_error(out->geterror());
-        },
-        function);
+    const detail::ImageBackend* table = nullptr;
+    std::string error;
+};
+
+LoadedBackend
+loadBackend()
+{
+    // Next to the object that holds this function (libvdbmatch.so, or the executable or Python
+    // module the library was linked into statically), then by the loader's search path.
+    std::vector<std::string> candidates;
+    Dl_info info;
+    if (dladdr(reinterpret_cast<void*>(&loadBackend), &info) && info.dli_fname) {
+        std::error_code ec;
+        const fs::path self = fs::canonical(info.dli_fname, ec);
+        if (!ec) candidates.push_back((self.parent_path() / detail::IMAGE_BACKEND_MODULE).string());
+    }
+    candidates.push_back(detail::IMAGE_BACKEND_MODULE);
+    LoadedBackend result;
+    std::string tried;
+    for (const std::string& path : candidates) {
+        void* handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+        if (!handle) {
+            const char* e = dlerror();
+            tried += std::string(tried.empty() ? "" : "; ") + (e ? e : path + ": not loadable");
+            continue;
+        }
+        // Never closed: OpenImageIO keeps plugins and threads until the process exits.
+        using Entry = const detail::ImageBackend* (*)();
+        const auto entry = reinterpret_cast<Entry>(dlsym(handle, "vdbmatch_image_backend"));
+        const detail::ImageBackend* table = entry ? entry() : nullptr;
+        if (!table || table->version != detail::IMAGE_BACKEND_VERSION) {
+            tried += std::string(tried.empty() ? "" : "; ") + path +
+                     ": not a vdbmatch image module of this version";
+            continue;
+        }
+        result.table = table;
+        return result;
+    }
+    result.error = std::string("pictures need the OpenImageIO module ") +
+                   detail::IMAGE_BACKEND_MODULE +
+                   ", installed next to libvdbmatch, but it could not be loaded (" + tried + ")";
+    return result;
+}
+
+const detail::ImageBackend&
+backend()
+{
+    static const LoadedBackend loaded = loadBackend(); // thread-safe, once per process
+    if (!loaded.table) OPENVDB_THROW(openvdb::IoError, loaded.error);
+    return *loaded.table;
 }
 
 } // namespace
@@ -92,20 +118,14 @@ writeExr(const std::string& path, const ImageChannels& image, const ImageAttribu
                                                "channels = " +
                                                std::to_string(expected));
     }
-    OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(image.names.size()),
-                         OIIO::TypeDesc::FLOAT);
-    spec.channelnames = image.names;
-    spec.alpha_channel = -1;
-    spec.attribute("compression", "zip");
     for (const auto& [name, value] : attributes) {
         if (name.empty()) OPENVDB_THROW(openvdb::ValueError, fn + ": empty attribute name");
         if (RESERVED_EXR_ATTRIBUTES.count(name)) {
             OPENVDB_THROW(openvdb::ValueError,
                           fn + ": attribute name " + quoted(name) + " is reserved by OpenEXR");
         }
-        spec.attribute(name, value);
     }
-    writeAtomically(fn, path, "openexr", spec, OIIO::TypeDesc::FLOAT, image.pixels.data());
+    backend().writeExr(path, image, attributes);
 }
 
 void
@@ -122,36 +142,13 @@ writePng(const std::string& path, int width, int height, const std::vector<std::
                                                " bytes given, expected 3 * width * height = " +
                                                std::to_string(expected));
     }
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
-    writeAtomically(fn, path, "png", spec, OIIO::TypeDesc::UINT8, rgb.data());
+    backend().writePng(path, width, height, rgb);
 }
 
 ImageChannels
 readImage(const std::string& path, ImageAttributes* attributes)
 {
-    const std::string fn = "readImage(" + quoted(path) + ")";
-    std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
-    if (!in) OPENVDB_THROW(openvdb::IoError, fn + ": cannot open: " + OIIO::geterror());
-    const OIIO::ImageSpec& spec = in->spec();
-    ImageChannels image;
-    image.width = spec.width;
-    image.height = spec.height;
-    image.names = spec.channelnames;
-    image.pixels.resize(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
-    if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-        OPENVDB_THROW(openvdb::IoError, fn + ": cannot read the pixels: " + in->geterror());
-    }
-    if (attributes) {
-        attributes->clear();
-        for (const OIIO::ParamValue& p : spec.extra_attribs) {
-            if (p.type() == OIIO::TypeDesc::STRING) {
-                attributes->emplace_back(p.name().string(), p.get_string());
-            }
-        }
-    }
-    in->close();
-    return image;
+    return backend().readImage(path, attributes);
 }
 
 } // namespace vdbmatch

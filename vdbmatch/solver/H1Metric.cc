@@ -437,9 +437,19 @@ H1Metric<D>::applyInverse(const NodeVectors<D>& gIn, NodeVectors<D>& out, bool t
     if (!mFactor) {
         info = solveCg(b, x, w, threaded, warm);
     } else {
-        // All D components with one factorisation: right-hand sides as the columns of B.
-        const Eigen::Matrix<Real, Eigen::Dynamic, D> X = mFactor->solve(b.transpose());
-        x = X.transpose();
+        // All D components with one factorisation. Eigen's triangular solves treat the columns
+        // of a right-hand side one after the other with the same arithmetic, so solving them
+        // side by side (one component per task) gives the same bits as one multi-column solve.
+        auto solveComponent = [&](int c) {
+            const Eigen::Matrix<Real, Eigen::Dynamic, 1> xc = mFactor->solve(b.row(c).transpose());
+            x.row(c) = xc.transpose();
+        };
+        if (threaded) {
+            tbb::parallel_for(0, D, solveComponent);
+        } else {
+            for (int c = 0; c < D; ++c)
+                solveComponent(c);
+        }
     }
     for (Eigen::Index k = 0; k < u; ++k)
         out.col(mFreeNodes[std::size_t(k)]) = x.col(k);
