@@ -994,17 +994,77 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformed->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
     deformed->insertMeta("is_interrupted", openvdb::BoolMetadata(interrupted));
 
-    // The exact inverse at every node and det D phi per cell, from the grid as written.
     ExtraOutputs extra;
-    openvdb::Vec3SGrid::Ptr inverseGrid;
+    // --half: half floats keep 11 significant bits of each displacement, which at fine levels
+    // can flip a thin simplex. A grid is stored in half only if its rounded values keep every
+    // det D > 0; otherwise it stays float and the report says so.
+    auto chooseHalf = [&](const openvdb::Vec3SGrid::Ptr& grid, const char* file) {
+        if (!o.half || !grid) return;
+        const double minDet = minDeterminantAsHalf(*grid);
+        if (minDet > 0) {
+            grid->setSaveFloatAsHalf(true);
+        } else {
+            progress->message(std::string("warning: --half would fold ") + file + " (min det D " +
+                              fixed("%.3g", minDet) + " after rounding): written in float");
+            extra.halfRefused.push_back(file);
+        }
+    };
+    chooseHalf(deformation, "deformation.vdb");
+
+    // det D phi per cell first: the one output that can fail (--log-jacobian of a fold), so
+    // that it fails before any file is written.
     openvdb::FloatGrid::Ptr jacobianGrid;
-    if (!interrupted && (o.writeInverse || o.writeJacobian)) {
-        const DeformationField field(deformation);
-        if (o.writeInverse) {
+    if (!interrupted && o.writeJacobian && !wasSignalled()) {
+        const Clock::time_point t0 = Clock::now();
+        jacobianGrid =
+            makeJacobianGrid(DeformationField(deformation), o.logJacobian, true, &interrupter);
+        if (jacobianGrid) {
+            extra.jacobian = true;
+            extra.jacobianSeconds = secondsSince(t0);
+            extra.detMin = jacobianGrid->metaValue<double>("vdbmatch_det_min");
+            extra.detMax = jacobianGrid->metaValue<double>("vdbmatch_det_max");
+            jacobianGrid->insertMeta("vdbmatch_version", openvdb::StringMetadata(VDBMATCH_VERSION));
+            jacobianGrid->insertMeta("vdbmatch_command", openvdb::StringMetadata(o.commandLine));
+        }
+    }
+    const std::string dir = o.outDir;
+    openvdb::MetaMap fileMeta;
+    fileMeta.insertMeta("creator",
+                        openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
+    // A stale inverse or Jacobian of an earlier run must not sit next to this deformation.
+    for (const char* name : {"inverse.vdb", "jacobian.vdb"}) {
+        std::error_code removeError; // absent is fine
+        fs::remove(fs::path(dir) / name, removeError);
+    }
+    // Each file is compressed and written on one thread (OpenVDB's blosc calls are serial), so
+    // the files are written side by side, each one atomically, and while the exact inverse is
+    // computed (which only reads the deformation grid). wait() rethrows the first writer's
+    // exception, after the others finished.
+    tbb::task_group writers;
+    writers.run([&] {
+        writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
+    });
+    if (jacobianGrid) {
+        writers.run([&] {
+            writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid},
+                                 fileMeta);
+        });
+    }
+    writers.run([&] {
+        writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
+        writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
+                            [&](std::ostream& os) { writeObj(os, result.deformedSource); });
+    });
+
+    // The exact inverse at every node, from the grid as written.
+    openvdb::Vec3SGrid::Ptr inverseGrid;
+    try {
+        if (!interrupted && o.writeInverse && !wasSignalled()) {
             progress->message("computing the exact inverse at " +
                               std::to_string(deformation->activeVoxelCount()) + " nodes");
             const Clock::time_point t0 = Clock::now();
-            const InverseGridResult inv = makeInverseGrid(field, true, &interrupter);
+            const InverseGridResult inv =
+                makeInverseGrid(DeformationField(deformation), true, &interrupter);
             if (inv.grid) {
                 inverseGrid = inv.grid;
                 extra.inverse = true;
@@ -1020,75 +1080,18 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                       std::to_string(inv.failures) +
                                       " nodes (det D phi <= 0); inverse.vdb is wrong there");
                 }
+                chooseHalf(inverseGrid, "inverse.vdb");
+                writers.run([&] {
+                    writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid},
+                                         fileMeta);
+                });
             }
         }
-        if (o.writeJacobian && !wasSignalled()) {
-            const Clock::time_point t0 = Clock::now();
-            jacobianGrid = makeJacobianGrid(field, o.logJacobian, true, &interrupter);
-            if (jacobianGrid) {
-                extra.jacobian = true;
-                extra.jacobianSeconds = secondsSince(t0);
-                extra.detMin = jacobianGrid->metaValue<double>("vdbmatch_det_min");
-                extra.detMax = jacobianGrid->metaValue<double>("vdbmatch_det_max");
-                jacobianGrid->insertMeta("vdbmatch_version",
-                                         openvdb::StringMetadata(VDBMATCH_VERSION));
-                jacobianGrid->insertMeta("vdbmatch_command",
-                                         openvdb::StringMetadata(o.commandLine));
-            }
-        }
+    } catch (...) {
+        writers.wait(); // no writer may outlive the grids it writes
+        throw;
     }
-    if (o.half) {
-        // Half floats keep 11 significant bits of each displacement: at fine levels that can
-        // flip a thin simplex. Store a grid in half only if its rounded values keep every
-        // det D > 0; otherwise keep float and say so.
-        for (openvdb::Vec3SGrid::Ptr grid : {deformation, inverseGrid}) {
-            if (!grid) continue;
-            const double minDet = minDeterminantAsHalf(*grid);
-            if (minDet > 0) {
-                grid->setSaveFloatAsHalf(true);
-            } else {
-                progress->message(std::string("warning: --half would fold ") +
-                                  (grid == deformation ? "deformation.vdb" : "inverse.vdb") +
-                                  " (min det D " + fixed("%.3g", minDet) +
-                                  " after rounding): written in float");
-                extra.halfRefused.push_back(grid == deformation ? "deformation.vdb"
-                                                                : "inverse.vdb");
-            }
-        }
-    }
-
-    const std::string dir = o.outDir;
-    openvdb::MetaMap fileMeta;
-    fileMeta.insertMeta("creator",
-                        openvdb::StringMetadata(std::string("vdbmatch ") + VDBMATCH_VERSION));
-    // A stale inverse or Jacobian of an earlier run must not sit next to this deformation.
-    for (const char* name : {"inverse.vdb", "jacobian.vdb"}) {
-        std::error_code removeError; // absent is fine
-        fs::remove(fs::path(dir) / name, removeError);
-    }
-    // Each file is compressed and written on one thread (OpenVDB's blosc calls are serial), so
-    // the files are written side by side; each one atomically, as before.
-    tbb::task_group writers;
-    writers.run([&] {
-        writeGridsAtomically((fs::path(dir) / "deformation.vdb").string(), {deformation}, fileMeta);
-    });
-    if (inverseGrid) {
-        writers.run([&] {
-            writeGridsAtomically((fs::path(dir) / "inverse.vdb").string(), {inverseGrid}, fileMeta);
-        });
-    }
-    if (jacobianGrid) {
-        writers.run([&] {
-            writeGridsAtomically((fs::path(dir) / "jacobian.vdb").string(), {jacobianGrid},
-                                 fileMeta);
-        });
-    }
-    writers.run([&] {
-        writeGridsAtomically((fs::path(dir) / "deformed.vdb").string(), {deformed}, fileMeta);
-        writeFileAtomically((fs::path(dir) / "deformed.obj").string(),
-                            [&](std::ostream& os) { writeObj(os, result.deformedSource); });
-    });
-    writers.wait(); // rethrows the first writer's exception, after the others finished
+    writers.wait();
     extra.files.push_back("deformation.vdb");
     if (inverseGrid) extra.files.push_back("inverse.vdb");
     if (jacobianGrid) extra.files.push_back("jacobian.vdb");
