@@ -328,8 +328,9 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d) const
     return sampleDistance(x, d, nullptr);
 }
 
+// flatten (here and in sample()): locate() and the interpolation inlined, the same bits.
 template <int D>
-bool
+__attribute__((flatten)) bool
 FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const
 {
     Real t[D];
@@ -345,7 +346,7 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) c
 }
 
 template <int D>
-bool
+__attribute__((flatten)) bool
 FieldSampler<D>::sample(const Vec<D>& x, RawFields<D>& fields, RawFieldDerivatives<D>* deriv) const
 {
     constexpr int NC = NUM_COMPONENTS;

@@ -216,7 +216,8 @@ DeformationField::inverse(const openvdb::Vec3d& yWorld, const openvdb::Vec3d& gu
     return r;
 }
 
-DeformationField::InverseResult
+// flatten: locateIndex() and the accessor look-ups inlined into the walk (the same bits).
+__attribute__((flatten)) DeformationField::InverseResult
 DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x,
                                ConstAccessor& acc) const
 {
