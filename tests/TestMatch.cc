@@ -125,10 +125,9 @@ checkMatch(const Surface<D>& source, const Surface<D>& target, const MatchOption
     for (const LevelSummary& l : result.levels) {
         EXPECT_GT(l.report.terms.bandSimplices, 0u) << "level " << l.level;
         EXPECT_EQ(l.report.terms.coarseBandSimplices, 0u) << "level " << l.level;
-        // The surface test (default in 3D) may end only the last surfaceLevels levels.
+        // The surface test (default in 3D) may end only the levels it applies at.
         const bool surfaceLevel =
-            l.level > opts.multiscale.maxLevel - opts.multiscale.surfaceLevels &&
-            opts.multiscale.surfaceTolerance > 0;
+            opts.multiscale.surfaceTestAt(l.level) && opts.multiscale.surfaceTolerance > 0;
         std::printf("[ level %d ] %s (%s) after %d iterations\n", l.level,
                     solver::toString(l.report.status), solver::toString(l.report.convergedBy),
                     l.report.iterations);

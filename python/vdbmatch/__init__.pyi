@@ -73,6 +73,7 @@ def match(
     settle_tolerance: float | None = None,
     surface_tolerance: float | None = None,
     surface_levels: int | None = None,
+    surface_from_level: int | None = None,
     tolerance_coarsening: float | None = None,
     gradient_tolerance: float | None = None,
     metric_tau: float | None = None,

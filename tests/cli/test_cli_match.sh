@@ -149,17 +149,32 @@ fi
 "$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-for k in ("surfaceTolerance", "surfaceLevels", "coarseMembraneFactor"):
+for k in ("surfaceTolerance", "surfaceLevels", "surfaceFromLevel", "coarseMembraneFactor"):
     r["parameters"].pop(k, None)
 json.dump(r, open(sys.argv[2], "w"))
 PY
 check config-old-report 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old" --config "$SCRATCH/old_report.json" --levels 3..3 --quiet
 count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 else 1)' "$SCRATCH/m3old/report.json"; then
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 and p["surfaceFromLevel"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
     echo "ok   config-old-report-surface-off"
 else
     fail "config-old-report-surface-off"
 fi
+# ... and one with the surface test but before surfaceFromLevel keeps it at the last level only.
+"$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report2.json" <<'PY'
+import json, sys
+r = json.load(open(sys.argv[1]))
+r["parameters"].pop("surfaceFromLevel")
+json.dump(r, open(sys.argv[2], "w"))
+PY
+check config-old-report-from-level 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old2" --config "$SCRATCH/old_report2.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceFromLevel"] == 0 and p["surfaceTolerance"] > 0 else 1)' "$SCRATCH/m3old2/report.json"; then
+    echo "ok   config-old-report-from-level-off"
+else
+    fail "config-old-report-from-level-off"
+fi
+check surface-from-level-negative 3 '' 'surfaceFromLevel must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --surface-from-level -1 --quiet
 check config-unknown-key 3 '' "unknown key 'levelz'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/typo.json" --quiet
 check config-bad-value 1 '' "key 'cMatch': --c-match expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/badvalue.json" --quiet
 check config-not-object 3 '' 'not a JSON object' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --config "$SCRATCH/array.json" --quiet

@@ -225,6 +225,35 @@ private:
 
 } // namespace
 
+TEST(Descent, SurfaceTestAppliesAtTheLastLevelsAndFromALevelOn)
+{
+    MultiscaleOptions opts = MultiscaleOptions::defaults(3);
+    opts.minLevel = 4;
+    opts.maxLevel = 8;
+    auto levels = [&] {
+        std::vector<int> at;
+        for (int l = opts.minLevel; l <= opts.maxLevel; ++l)
+            if (opts.surfaceTestAt(l)) at.push_back(l);
+        return at;
+    };
+    opts.surfaceLevels = 1;
+    opts.surfaceFromLevel = 0;
+    EXPECT_EQ(levels(), std::vector<int>({8}));
+    opts.surfaceFromLevel = 7;
+    EXPECT_EQ(levels(), std::vector<int>({7, 8}));
+    opts.surfaceFromLevel = 9; // beyond the finest: the last surfaceLevels still apply
+    EXPECT_EQ(levels(), std::vector<int>({8}));
+    opts.surfaceLevels = 0;
+    EXPECT_TRUE(levels().empty());
+    opts.surfaceFromLevel = 6;
+    EXPECT_EQ(levels(), std::vector<int>({6, 7, 8}));
+    opts.surfaceLevels = 3;
+    opts.surfaceFromLevel = 0;
+    EXPECT_EQ(levels(), std::vector<int>({6, 7, 8}));
+    opts.surfaceFromLevel = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, CircleToEllipse2D)
 {
     MultiscaleOptions opts = MultiscaleOptions::defaults(2);

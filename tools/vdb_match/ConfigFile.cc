@@ -44,6 +44,7 @@ configKeys()
         {"toleranceCoarsening", "--tolerance-coarsening"},
         {"surfaceTolerance", "--surface-tolerance"},
         {"surfaceLevels", "--surface-levels"},
+        {"surfaceFromLevel", "--surface-from-level"},
         {"relativeGradientTolerance", "--gradient-tolerance"},
         {"landmarkWeight", "--landmark-weight"},
         {"landmarks", "--landmarks"},
@@ -118,6 +119,12 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("cMem") &&
         !params.contains("coarseMembraneFactor")) {
         settings.push_back({"coarseMembraneFactor", "--coarse-membrane-factor", "1"});
+    }
+    // ... and one before the surface test from a fixed level (no surfaceFromLevel) applied it
+    // at the last surfaceLevels levels only, if at all.
+    if (doc.contains("parameters") && params.contains("energyTolerance") &&
+        !params.contains("surfaceFromLevel")) {
+        settings.push_back({"surfaceFromLevel", "--surface-from-level", "0"});
     }
     return settings;
 }

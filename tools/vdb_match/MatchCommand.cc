@@ -77,6 +77,7 @@ struct MatchCliOptions
     double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
     std::optional<double> surfaceTolerance; ///< default per dimension (MatchOptions::defaults)
     int surfaceLevels = MatchOptions::defaults(3).multiscale.surfaceLevels;
+    std::optional<int> surfaceFromLevel; ///< default per dimension (MatchOptions::defaults)
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
@@ -280,6 +281,14 @@ matchOptionTable()
         {"--surface-levels", "N", "Descent",
          "the surface test applies at the last N levels only (default " + std::to_string(d.surfaceLevels) + ")",
          [](O& o, const std::string& v) { o.surfaceLevels = parseInt("--surface-levels", v); }},
+        {"--surface-from-level", "L", "Descent",
+         "... and at every level >= L (default " +
+             std::to_string(MatchOptions::defaults(3).multiscale.surfaceFromLevel) +
+             ": only the last --surface-levels; 7 at levels 4..8 ends level 7 too, faster but "
+             "less consistent: docs/performance.md)",
+         [](O& o, const std::string& v) {
+             o.surfaceFromLevel = parseInt("--surface-from-level", v);
+         }},
         {"--tolerance-coarsening", "F", "Descent",
          "level l divides the energy, settle and surface tolerances by F^(last level - l): coarse levels, "
          "where iterations are cheap, converge further (default " + formatNumber(d.toleranceCoarsening) + ")",
@@ -681,6 +690,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"settleTolerance", descent.settleTolerance},
              {"surfaceTolerance", opts.multiscale.surfaceTolerance},
              {"surfaceLevels", opts.multiscale.surfaceLevels},
+             {"surfaceFromLevel", opts.multiscale.surfaceFromLevel},
              {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
              {"relativeGradientTolerance", descent.relativeGradientTolerance},
              {"landmarkWeight", opts.landmarkWeight}});
@@ -798,6 +808,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
     if (o.surfaceTolerance) opts.multiscale.surfaceTolerance = *o.surfaceTolerance;
     opts.multiscale.surfaceLevels = o.surfaceLevels;
+    if (o.surfaceFromLevel) opts.multiscale.surfaceFromLevel = *o.surfaceFromLevel;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;
@@ -880,9 +891,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 
-    const int firstSurfaceLevel = opts.multiscale.surfaceTolerance > 0
-                                      ? opts.multiscale.maxLevel - opts.multiscale.surfaceLevels + 1
-                                      : opts.multiscale.maxLevel + 1;
+    int firstSurfaceLevel = opts.multiscale.maxLevel + 1;
+    if (opts.multiscale.surfaceTolerance > 0) {
+        for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
+            if (opts.multiscale.surfaceTestAt(l)) firstSurfaceLevel = l;
+    }
     auto progress = std::make_unique<ProgressPrinter>(err, o, D, opts.multiscale.minLevel,
                                                       opts.multiscale.maxLevel, firstSurfaceLevel);
     progress->message(

@@ -43,6 +43,9 @@ MultiscaleOptions::validate() const
     if (surfaceLevels < 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: surfaceLevels must be >= 0, got " << surfaceLevels);
+    if (surfaceFromLevel < 0)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: surfaceFromLevel must be >= 0, got " << surfaceFromLevel);
     if (!(coarseMembraneFactor >= 0 && coarseMembraneFactor <= MAX_COEFFICIENT))
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: coarseMembraneFactor must be finite and in [0, "
@@ -135,9 +138,8 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         const Real tighten = std::pow(mOpts.toleranceCoarsening, mOpts.maxLevel - l);
         levelDescent.settleTolerance /= tighten;
         levelDescent.energyTolerance /= tighten;
-        levelDescent.surfaceTolerance = l > mOpts.maxLevel - mOpts.surfaceLevels
-                                            ? mOpts.surfaceTolerance * in.lattice->h() / tighten
-                                            : 0.0;
+        levelDescent.surfaceTolerance =
+            mOpts.surfaceTestAt(l) ? mOpts.surfaceTolerance * in.lattice->h() / tighten : 0.0;
         solver::Descent<D> descent(energy, metric, levelDescent);
         // phi at the surface points as a function of u on this level's lattice.
         solver::SurfaceProbe<D> probe;

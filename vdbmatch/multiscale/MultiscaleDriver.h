@@ -98,6 +98,15 @@ struct MultiscaleOptions
     /// Number of finest levels at which the surface test applies (>= 0). The coarse levels set
     /// the correspondence through slow tangential motion and must run to the energy test.
     int surfaceLevels = 1;
+    /// The surface test also applies at every level >= surfaceFromLevel (0: none beyond the last
+    /// surfaceLevels): from a fine enough level on, the cells resolve the shapes' parts and a
+    /// level refines the fit rather than sets the correspondence (>= 0).
+    int surfaceFromLevel = 0;
+    /// Whether the surface test applies at level @a l (given a positive surfaceTolerance).
+    bool surfaceTestAt(int l) const
+    {
+        return l > maxLevel - surfaceLevels || (surfaceFromLevel > 0 && l >= surfaceFromLevel);
+    }
     /// Membrane weight below the finest level, an addition to the paper (which uses one c_mem):
     /// levels l < maxLevel use coarseMembraneFactor * energy.cMem in eq:EsymMem, the finest level
     /// energy.cMem (finite, in [0, MAX_COEFFICIENT]; 1: the paper). The coarse levels set the
