@@ -157,7 +157,7 @@ DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) con
     return cellDeterminants(mDim, u.data(), dets);
 }
 
-int
+__attribute__((flatten)) int
 DeformationField::cellDeterminants(int dimension, const openvdb::Vec3d* u, double* dets)
 {
     std::array<int, 3> order{{0, 1, 2}};
