@@ -11,6 +11,8 @@
 #include <dlfcn.h>
 #include <filesystem>
 #include <set>
+#include <string>
+#include <vector>
 
 namespace vdbmatch {
 
@@ -64,6 +66,7 @@ loadBackend()
         const auto entry = reinterpret_cast<Entry>(dlsym(handle, "vdbmatch_image_backend"));
         const detail::ImageBackend* table = entry ? entry() : nullptr;
         if (!table || table->version != detail::IMAGE_BACKEND_VERSION) {
+            dlclose(handle);
             tried += std::string(tried.empty() ? "" : "; ") + path +
                      ": not a vdbmatch image module of this version";
             continue;
