@@ -107,7 +107,7 @@ MatchOptions::paper(int dim)
     opts.multiscale.toleranceCoarsening = DEFAULT_MATCH_TOLERANCE_COARSENING;
     opts.multiscale.surfaceTolerance = 0;
     opts.multiscale.surfaceLevels = DEFAULT_MATCH_SURFACE_LEVELS;
-    opts.multiscale.surfaceFromLevel = 0;
+    opts.multiscale.surfaceFromLevel = DEFAULT_MATCH_SURFACE_FROM_LEVEL;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
     return opts;
@@ -119,7 +119,6 @@ MatchOptions::defaults(int dim)
     MatchOptions opts = paper(dim);
     opts.multiscale.surfaceTolerance =
         dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
-    opts.multiscale.surfaceFromLevel = dim == 2 ? 0 : DEFAULT_MATCH_SURFACE_FROM_LEVEL_3D;
     opts.multiscale.coarseMembraneFactor = DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR;
     return opts;
 }

@@ -74,14 +74,14 @@ constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 constexpr double DEFAULT_MATCH_SURFACE_TOLERANCE_3D = 0.02;
 constexpr double DEFAULT_MATCH_SURFACE_TOLERANCE_2D = 0;
 constexpr int DEFAULT_MATCH_SURFACE_LEVELS = 1;
-/// Default MultiscaleOptions::surfaceFromLevel in 3D (--surface-from-level): 0, the surface test
+/// Default MultiscaleOptions::surfaceFromLevel (--surface-from-level): 0, the surface test
 /// ends the finest level only. With 7 it also ends level 7 of the default levels 4..8 once the
 /// surface has settled (starfish: 19 iterations instead of 78, the whole match 27.9 s instead of
 /// 35.6 s); on the accuracy benchmark at 4..8 the mean error moved by -1%..+6% but
 /// |psi o phi - Id| by -13%..+27%, so it is an option, not the default (docs/performance.md).
 /// Ending level 6 the same way (7 at levels 4..7) cost 6-19% correspondence error: the coarser
 /// levels set the correspondence in their slow tail (docs/numerics.md).
-constexpr int DEFAULT_MATCH_SURFACE_FROM_LEVEL_3D = 0;
+constexpr int DEFAULT_MATCH_SURFACE_FROM_LEVEL = 0;
 /// Default MultiscaleOptions::coarseMembraneFactor (--coarse-membrane-factor), an addition to the
 /// paper: the levels below the finest weigh the membrane term by 3 c_mem. The coarse levels set
 /// the tangential correspondence, and a stiffer membrane there keeps it closer to an isometry;

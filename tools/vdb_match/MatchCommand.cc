@@ -77,7 +77,7 @@ struct MatchCliOptions
     double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
     std::optional<double> surfaceTolerance; ///< default per dimension (MatchOptions::defaults)
     int surfaceLevels = MatchOptions::defaults(3).multiscale.surfaceLevels;
-    std::optional<int> surfaceFromLevel; ///< default per dimension (MatchOptions::defaults)
+    int surfaceFromLevel = MatchOptions::defaults(3).multiscale.surfaceFromLevel;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
     double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
@@ -282,8 +282,7 @@ matchOptionTable()
          "the surface test applies at the last N levels only (default " + std::to_string(d.surfaceLevels) + ")",
          [](O& o, const std::string& v) { o.surfaceLevels = parseInt("--surface-levels", v); }},
         {"--surface-from-level", "L", "Descent",
-         "... and at every level >= L (default " +
-             std::to_string(MatchOptions::defaults(3).multiscale.surfaceFromLevel) +
+         "... and at every level >= L (default " + std::to_string(d.surfaceFromLevel) +
              ": only the last --surface-levels; 7 at levels 4..8 ends level 7 too, faster but "
              "less consistent: docs/performance.md)",
          [](O& o, const std::string& v) {
@@ -808,7 +807,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
     if (o.surfaceTolerance) opts.multiscale.surfaceTolerance = *o.surfaceTolerance;
     opts.multiscale.surfaceLevels = o.surfaceLevels;
-    if (o.surfaceFromLevel) opts.multiscale.surfaceFromLevel = *o.surfaceFromLevel;
+    opts.multiscale.surfaceFromLevel = o.surfaceFromLevel;
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;
@@ -891,11 +890,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 
-    int firstSurfaceLevel = opts.multiscale.maxLevel + 1;
-    if (opts.multiscale.surfaceTolerance > 0) {
-        for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
-            if (opts.multiscale.surfaceTestAt(l)) firstSurfaceLevel = l;
-    }
+    int firstSurfaceLevel = opts.multiscale.minLevel;
+    while (
+        firstSurfaceLevel <= opts.multiscale.maxLevel &&
+        !(opts.multiscale.surfaceTolerance > 0 && opts.multiscale.surfaceTestAt(firstSurfaceLevel)))
+        ++firstSurfaceLevel;
     auto progress = std::make_unique<ProgressPrinter>(err, o, D, opts.multiscale.minLevel,
                                                       opts.multiscale.maxLevel, firstSurfaceLevel);
     progress->message(

@@ -24,15 +24,17 @@ constexpr int IMAGE_BACKEND_VERSION = 1;
 /// File name of the module (looked up next to the library, then by the dynamic loader's path).
 constexpr const char* IMAGE_BACKEND_MODULE = "libvdbmatch_image.so";
 
-/// The functions of ImageIO.h that need OpenImageIO, called with checked arguments.
+/// The functions of ImageIO.h that need OpenImageIO, called with checked arguments; @a label
+/// names the call in error messages (e.g. "writeExr('out.exr')").
 struct ImageBackend
 {
     int version;
-    void (*writeExr)(const std::string& path, const ImageChannels& image,
+    void (*writeExr)(const std::string& label, const std::string& path, const ImageChannels& image,
                      const ImageAttributes& attributes);
-    void (*writePng)(const std::string& path, int width, int height,
+    void (*writePng)(const std::string& label, const std::string& path, int width, int height,
                      const std::vector<std::uint8_t>& rgb);
-    ImageChannels (*readImage)(const std::string& path, ImageAttributes* attributes);
+    ImageChannels (*readImage)(const std::string& label, const std::string& path,
+                               ImageAttributes* attributes);
 };
 
 } // namespace detail

@@ -13,12 +13,6 @@
 namespace vdbmatch {
 namespace {
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
-
 /// Writes @a spec / @a data with OpenImageIO's writer for @a format ("openexr", "png") to
 /// @a path atomically (writeFileAtomicallyVia: temporary file, flush, rename).
 void
@@ -45,7 +39,8 @@ writeAtomically(const std::string& function, const std::string& path, const std:
 }
 
 void
-writeExrOiio(const std::string& path, const ImageChannels& image, const ImageAttributes& attributes)
+writeExrOiio(const std::string& label, const std::string& path, const ImageChannels& image,
+             const ImageAttributes& attributes)
 {
     OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(image.names.size()),
                          OIIO::TypeDesc::FLOAT);
@@ -54,23 +49,21 @@ writeExrOiio(const std::string& path, const ImageChannels& image, const ImageAtt
     spec.attribute("compression", "zip");
     for (const auto& [name, value] : attributes)
         spec.attribute(name, value);
-    writeAtomically("writeExr(" + quoted(path) + ")", path, "openexr", spec, OIIO::TypeDesc::FLOAT,
-                    image.pixels.data());
+    writeAtomically(label, path, "openexr", spec, OIIO::TypeDesc::FLOAT, image.pixels.data());
 }
 
 void
-writePngOiio(const std::string& path, int width, int height, const std::vector<std::uint8_t>& rgb)
+writePngOiio(const std::string& label, const std::string& path, int width, int height,
+             const std::vector<std::uint8_t>& rgb)
 {
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
     spec.attribute("oiio:ColorSpace", "sRGB");
-    writeAtomically("writePng(" + quoted(path) + ")", path, "png", spec, OIIO::TypeDesc::UINT8,
-                    rgb.data());
+    writeAtomically(label, path, "png", spec, OIIO::TypeDesc::UINT8, rgb.data());
 }
 
 ImageChannels
-readImageOiio(const std::string& path, ImageAttributes* attributes)
+readImageOiio(const std::string& fn, const std::string& path, ImageAttributes* attributes)
 {
-    const std::string fn = "readImage(" + quoted(path) + ")";
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
     if (!in) OPENVDB_THROW(openvdb::IoError, fn + ": cannot open: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();

@@ -128,7 +128,7 @@ writeExr(const std::string& path, const ImageChannels& image, const ImageAttribu
                           fn + ": attribute name " + quoted(name) + " is reserved by OpenEXR");
         }
     }
-    backend().writeExr(path, image, attributes);
+    backend().writeExr(fn, path, image, attributes);
 }
 
 void
@@ -145,13 +145,13 @@ writePng(const std::string& path, int width, int height, const std::vector<std::
                                                " bytes given, expected 3 * width * height = " +
                                                std::to_string(expected));
     }
-    backend().writePng(path, width, height, rgb);
+    backend().writePng(fn, path, width, height, rgb);
 }
 
 ImageChannels
 readImage(const std::string& path, ImageAttributes* attributes)
 {
-    return backend().readImage(path, attributes);
+    return backend().readImage("readImage(" + quoted(path) + ")", path, attributes);
 }
 
 } // namespace vdbmatch
