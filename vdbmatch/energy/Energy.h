@@ -105,9 +105,18 @@ private:
     template <bool Grad>
     Real evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
                   bool threaded, openvdb::util::NullInterrupter* interrupter) const;
+    /// The loop over the simplices of one block (evaluateBlockBody), compiled for the baseline
+    /// x86-64 (evaluateBlock) and, for 3D, also for x86-64-v3 with run-time selection
+    /// (evaluateBlockClones); the same bits either way (Energy.cc).
     template <bool Grad>
     void evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
                        NodeVectors<D>* perSlot) const;
+    template <bool Grad>
+    void evaluateBlockClones(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
+                             NodeVectors<D>* perSlot) const;
+    template <bool Grad>
+    void evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
+                           NodeVectors<D>* perSlot) const;
 
     /// Shape-1 geometry at the centroid of a simplex inside the band of M1: it does not depend on
     /// phi, so it is sampled once, when the Energy is built. T+ and T- are stored as packed
