@@ -2,6 +2,8 @@
 /// @brief Atomic file writes: temporary file, fsync, rename.
 #include "AtomicFile.h"
 
+#include <vdbmatch/io/PathText.h>
+
 #include <openvdb/openvdb.h>
 
 #include <atomic>
@@ -16,11 +18,7 @@ namespace vdbmatch {
 
 namespace {
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
 } // namespace
 

@@ -4,6 +4,7 @@
 #include "ImageIO.h"
 
 #include <vdbmatch/io/ImageBackend.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/Exceptions.h>
 
@@ -26,11 +27,7 @@ const std::set<std::string> RESERVED_EXR_ATTRIBUTES = {
     "lineOrder", "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth",
 };
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
 /// The module, or why it could not be loaded.
 struct LoadedBackend

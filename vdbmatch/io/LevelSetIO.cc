@@ -6,6 +6,7 @@
 #include "VdbFileCheck.h"
 
 #include <vdbmatch/io/InputFile.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/io/File.h>
 #include <openvdb/tools/LevelSetRebuild.h>
@@ -28,11 +29,7 @@ namespace {
 /// surface. A narrow band of any useful width (>= 1 voxel on each side) satisfies it.
 constexpr double MIN_OUTER_LAYER_DISTANCE_VOXELS = 0.5;
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
 /// "'a' (float), 'b' (vec3s)" for the grids of a file.
 std::string

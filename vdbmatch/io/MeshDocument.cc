@@ -5,6 +5,7 @@
 #include "AtomicFile.h"
 
 #include <vdbmatch/io/InputFile.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/openvdb.h>
 
@@ -36,20 +37,9 @@ constexpr std::size_t STL_FLOAT_BYTES = 4;
 /// Enough characters for any double or float written by std::to_chars (shortest form).
 constexpr std::size_t NUMBER_CHARS = 32;
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
-std::string
-lowerExtension(const std::string& path)
-{
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext)
-        c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
+using detail::lowerExtension;
 
 /// The whole file as bytes.
 /// @throw openvdb::IoError if it is missing, a directory or unreadable

@@ -3,6 +3,7 @@
 #include "MeshIO.h"
 
 #include <vdbmatch/io/InputFile.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/openvdb.h>
 
@@ -35,20 +36,9 @@ constexpr size_t STL_TRIANGLE_BYTES = 50;
 /// Digits that make a double round-trip through text.
 constexpr int ROUND_TRIP_DIGITS = std::numeric_limits<double>::max_digits10;
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
-std::string
-lowerExtension(const std::string& path)
-{
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext)
-        c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
+using detail::lowerExtension;
 
 /// The whole file as bytes.
 /// @throw openvdb::IoError if it is missing, a directory or unreadable

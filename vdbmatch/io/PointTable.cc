@@ -6,6 +6,7 @@
 #include "AtomicFile.h"
 
 #include <vdbmatch/io/InputFile.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/openvdb.h>
 
@@ -29,11 +30,7 @@ constexpr std::size_t NUMBER_CHARS = 32;
 /// The UTF-8 byte-order mark.
 constexpr std::string_view UTF8_BOM = "\xEF\xBB\xBF";
 
-std::string
-quoted(const std::string& s)
-{
-    return "'" + s + "'";
-}
+using detail::quoted;
 
 /// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
 class ParseError

@@ -4,6 +4,7 @@
 #include <vdbmatch/geometry/SurfaceExtraction.h>
 #include <vdbmatch/io/LevelSetIO.h>
 #include <vdbmatch/io/MeshIO.h>
+#include <vdbmatch/io/PathText.h>
 
 #include <openvdb/Exceptions.h>
 
@@ -15,14 +16,7 @@ namespace vdbmatch {
 
 namespace {
 
-std::string
-lowerExtension(const std::string& path)
-{
-    std::string ext = std::filesystem::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return char(std::tolower(c)); });
-    return ext;
-}
+using detail::lowerExtension;
 
 } // namespace
 
