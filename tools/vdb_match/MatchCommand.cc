@@ -890,11 +890,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     // One match per output directory: a second run into it would interleave the outputs.
     const OutputLock lock(o.outDir);
 
-    int firstSurfaceLevel = opts.multiscale.minLevel;
-    while (
-        firstSurfaceLevel <= opts.multiscale.maxLevel &&
-        !(opts.multiscale.surfaceTolerance > 0 && opts.multiscale.surfaceTestAt(firstSurfaceLevel)))
-        ++firstSurfaceLevel;
+    int firstSurfaceLevel = opts.multiscale.maxLevel + 1; // none
+    if (opts.multiscale.surfaceTolerance > 0) {
+        for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
+            if (opts.multiscale.surfaceTestAt(l)) firstSurfaceLevel = l;
+    }
     auto progress = std::make_unique<ProgressPrinter>(err, o, D, opts.multiscale.minLevel,
                                                       opts.multiscale.maxLevel, firstSurfaceLevel);
     progress->message(

@@ -62,10 +62,10 @@ writePngOiio(const std::string& label, const std::string& path, int width, int h
 }
 
 ImageChannels
-readImageOiio(const std::string& fn, const std::string& path, ImageAttributes* attributes)
+readImageOiio(const std::string& label, const std::string& path, ImageAttributes* attributes)
 {
     std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(path);
-    if (!in) OPENVDB_THROW(openvdb::IoError, fn + ": cannot open: " + OIIO::geterror());
+    if (!in) OPENVDB_THROW(openvdb::IoError, label + ": cannot open: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     ImageChannels image;
     image.width = spec.width;
@@ -73,7 +73,7 @@ readImageOiio(const std::string& fn, const std::string& path, ImageAttributes* a
     image.names = spec.channelnames;
     image.pixels.resize(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
     if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data())) {
-        OPENVDB_THROW(openvdb::IoError, fn + ": cannot read the pixels: " + in->geterror());
+        OPENVDB_THROW(openvdb::IoError, label + ": cannot read the pixels: " + in->geterror());
     }
     if (attributes) {
         attributes->clear();
