@@ -7,8 +7,11 @@
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
+#include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <support/SwirlGrid.h>
@@ -233,6 +236,68 @@ TEST(DeformationField, JacobianMatchesFiniteDifferences)
             EXPECT_NEAR(J(r, c), column[r], 1e-6);
     }
     EXPECT_NEAR(field.jacobianDeterminant(x), J.det(), 1e-12);
+}
+
+TEST(DeformationField, InverseReportsTheInverseJacobian)
+{
+    // J of an inverse is (D phi)^{-1} on the simplex where the walk ended: at phi^{-1}(y).
+    for (int dim : {2, 3}) {
+        const DeformationField field(test::swirlGrid(dim, 4, 1.0, 0.25));
+        const openvdb::BBoxd box = field.worldBounds();
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<double> uniform(0.2, 0.8);
+        for (int k = 0; k < 100; ++k) {
+            openvdb::Vec3d y = box.min();
+            for (int a = 0; a < dim; ++a)
+                y[a] += uniform(rng) * box.extents()[a];
+            const DeformationField::InverseResult r = field.inverse(y);
+            ASSERT_TRUE(r.found);
+            const openvdb::Mat3d product = r.jacobian * field.jacobian(r.x);
+            for (int i = 0; i < 3; ++i)
+                for (int j = 0; j < 3; ++j)
+                    EXPECT_NEAR(product(i, j), i == j ? 1.0 : 0.0, 1e-9) << dim << "D";
+        }
+    }
+}
+
+TEST(DeformationField, CellDeterminantsAreTheSixKuhnSimplices)
+{
+    // det D phi on the Kuhn simplices of a unit cell, in the order of std::next_permutation of
+    // the axes (the path 0 -> e_o0 -> e_o0 + e_o1 -> 1), computed independently with Eigen.
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> uniform(-0.3, 0.3);
+    for (int trial = 0; trial < 50; ++trial) {
+        openvdb::Vec3d u[8];
+        for (auto& c : u)
+            c = openvdb::Vec3d(uniform(rng), uniform(rng), uniform(rng));
+        double dets[6];
+        ASSERT_EQ(DeformationField::cellDeterminants(3, u, dets), 6);
+        std::array<int, 3> order{{0, 1, 2}};
+        int k = 0;
+        do {
+            Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
+            int mask = 0;
+            for (int m = 0; m < 3; ++m) {
+                const int next = mask | (1 << order[m]);
+                for (int r = 0; r < 3; ++r)
+                    A(r, order[m]) += u[next][r] - u[mask][r];
+                mask = next;
+            }
+            EXPECT_NEAR(dets[k++], A.determinant(), 1e-14);
+        } while (std::next_permutation(order.begin(), order.end()));
+    }
+    // An affine displacement u(c) = M c: every simplex has det(1 + M).
+    Eigen::Matrix3d M;
+    M << 0.1, -0.2, 0.05, 0.3, 0.0, -0.1, 0.02, 0.15, -0.25;
+    openvdb::Vec3d u[8];
+    for (int c = 0; c < 8; ++c) {
+        const Eigen::Vector3d v = M * Eigen::Vector3d(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+        u[c] = openvdb::Vec3d(v[0], v[1], v[2]);
+    }
+    double dets[6];
+    DeformationField::cellDeterminants(3, u, dets);
+    for (double d : dets)
+        EXPECT_NEAR(d, (Eigen::Matrix3d::Identity() + M).determinant(), 1e-14);
 }
 
 TEST(DeformationField, RejectsRotatedTransforms)

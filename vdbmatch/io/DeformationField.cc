@@ -59,10 +59,16 @@ DeformationField::locate(const openvdb::Vec3d& xWorld, openvdb::Coord* vertices,
     locateIndex(mGrid->transform().worldToIndex(xWorld), vertices, weights, axes);
 }
 
-void
-DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
-                              int* axes) const
+namespace {
+
+/// DeformationField::locateIndex for a field of dimension @a dim (slice @a sliceK in 2D). A
+/// function of its own so that the inverse walk inlines it (a member of the shared library is
+/// not inlined into another member: it could be interposed).
+inline void
+kuhnLocate(int dim, int sliceK, const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
+           int* axes)
 {
+    const int mDim = dim;
     openvdb::Coord origin;
     std::array<double, 3> t{{0, 0, 0}};
     for (int a = 0; a < 3; ++a) {
@@ -71,7 +77,7 @@ DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices,
         t[a] = p[a] - f;
     }
     if (mDim == 2) {
-        origin[2] = mSliceK;
+        origin[2] = sliceK;
         t[2] = 0;
     }
     // Axes by decreasing t (ties: lower axis first, any choice gives the same value).
@@ -88,6 +94,15 @@ DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices,
         axes[m - 1] = order[m - 1];
         weights[m] = m < mDim ? t[order[m - 1]] - t[order[m]] : t[order[mDim - 1]];
     }
+}
+
+} // namespace
+
+void
+DeformationField::locateIndex(const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
+                              int* axes) const
+{
+    kuhnLocate(mDim, mSliceK, p, vertices, weights, axes);
 }
 
 openvdb::Vec3d
@@ -157,9 +172,45 @@ DeformationField::cellDeterminants(const openvdb::Coord& cell, double* dets) con
     return cellDeterminants(mDim, u.data(), dets);
 }
 
+namespace {
+
+/// det D phi on the Kuhn simplex of a unit cell whose path steps along axes a0, a1, a2 with
+/// displacement differences d0, d1, d2: column a_m of D phi is e_{a_m} + d_m. The same
+/// operations as the general loop of cellDeterminants().
+inline double
+pathDeterminant(const openvdb::Vec3d& d0, int a0, const openvdb::Vec3d& d1, int a1,
+                const openvdb::Vec3d& d2, int a2)
+{
+    openvdb::Mat3d A = openvdb::Mat3d::identity();
+    for (int r = 0; r < 3; ++r)
+        A(r, a0) += d0[r];
+    for (int r = 0; r < 3; ++r)
+        A(r, a1) += d1[r];
+    for (int r = 0; r < 3; ++r)
+        A(r, a2) += d2[r];
+    return A.det();
+}
+
+} // namespace
+
 __attribute__((flatten)) int
 DeformationField::cellDeterminants(int dimension, const openvdb::Vec3d* u, double* dets)
 {
+    if (dimension == 3) {
+        // The six paths in the order of std::next_permutation from (0, 1, 2), as below, with
+        // the twelve edge differences formed once (corner index bit a = step along axis a).
+        const openvdb::Vec3d e10 = u[1] - u[0], e20 = u[2] - u[0], e40 = u[4] - u[0];
+        const openvdb::Vec3d e31 = u[3] - u[1], e51 = u[5] - u[1], e32 = u[3] - u[2];
+        const openvdb::Vec3d e62 = u[6] - u[2], e54 = u[5] - u[4], e64 = u[6] - u[4];
+        const openvdb::Vec3d e73 = u[7] - u[3], e75 = u[7] - u[5], e76 = u[7] - u[6];
+        dets[0] = pathDeterminant(e10, 0, e31, 1, e73, 2); // (0, 1, 2)
+        dets[1] = pathDeterminant(e10, 0, e51, 2, e75, 1); // (0, 2, 1)
+        dets[2] = pathDeterminant(e20, 1, e32, 0, e73, 2); // (1, 0, 2)
+        dets[3] = pathDeterminant(e20, 1, e62, 2, e76, 0); // (1, 2, 0)
+        dets[4] = pathDeterminant(e40, 2, e54, 0, e75, 1); // (2, 0, 1)
+        dets[5] = pathDeterminant(e40, 2, e64, 1, e76, 0); // (2, 1, 0)
+        return 6;
+    }
     std::array<int, 3> order{{0, 1, 2}};
     int count = 0;
     do {
@@ -241,7 +292,7 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x,
         openvdb::Coord v[4];
         double w[4];
         int axes[3];
-        locateIndex(x + hint * NUDGE, v, w, axes);
+        kuhnLocate(mDim, mSliceK, x + hint * NUDGE, v, w, axes);
         ++result.simplices;
         // Barycentric coordinates of x in this simplex (the path order of the nudged point;
         // slightly negative ones are rounding) and the affine map phi(z) = z + sum lambda_m U_m.
@@ -272,11 +323,17 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x,
         // The preimage of [q, y] in this simplex: x + s d, d = A^{-1} (y - q).
         const openvdb::Vec3d rhs = y - q;
         openvdb::Vec3d d(0.0);
+        openvdb::Mat3d inverseA = openvdb::Mat3d::identity();
         if (mDim == 2) {
             d[0] = (A(1, 1) * rhs[0] - A(0, 1) * rhs[1]) / det;
             d[1] = (A(0, 0) * rhs[1] - A(1, 0) * rhs[0]) / det;
+            inverseA(0, 0) = A(1, 1) / det;
+            inverseA(0, 1) = -A(0, 1) / det;
+            inverseA(1, 0) = -A(1, 0) / det;
+            inverseA(1, 1) = A(0, 0) / det;
         } else {
-            d = A.inverse() * rhs;
+            inverseA = A.inverse();
+            d = inverseA * rhs;
         }
         // Rates of change of the barycentric coordinates along d, and the exit parameter.
         double mu[4];
@@ -301,6 +358,7 @@ DeformationField::inverseIndex(const openvdb::Vec3d& yIn, openvdb::Vec3d x,
             // whose error is below |d| times the jump of D phi across the face.
             result.x = x + d;
             result.residual = (q + A * d - y).length();
+            result.jacobian = inverseA;
             return result;
         }
         hint = d / length;

@@ -99,6 +99,9 @@ public:
         /// 1e-9 voxel, where the map of the next simplex differs by that times the jump of
         /// D phi.) Computed at no cost, unlike a separate |apply(x) - y|.
         double residual = 0;
+        /// D phi^{-1} at y: the inverse of D phi on the simplex where the walk ended (the
+        /// identity if it did not end). x + J (y' - y) is a first-order guess for phi^{-1}(y').
+        openvdb::Mat3d jacobian = openvdb::Mat3d::identity();
     };
     /// Exact phi^{-1}(y) (file comment), starting from the guess @a guessWorld (the fixed point
     /// iterate x = y - u(x) if none is given). Outside Omega, phi^{-1}(y) = y.
