@@ -109,7 +109,57 @@ checkRoundTrip()
     EXPECT_LT(worstInverse, tol);
 }
 
+/// Every voxel of the dense grid is the interpolator's value at its node, to the last bit, on a
+/// lattice with cells up to 8 voxels wide (whole leaves inside one cell, their lower faces next
+/// to finer, equal and coarser cells, and the boundary of Omega), even for a discontinuous
+/// field.
+template <int D>
+void
+checkEveryNodeIsTheSearch()
+{
+    const int level = D == 2 ? 8 : 6;
+    const RefinementPredicate<D> nearSphere = [](const Vec<D>& c, Real r) {
+        return std::abs((c - Vec<D>::Constant(0.45)).norm() - 0.2) < 0.02 + r;
+    };
+    const SimplexLattice<D> lattice = buildAdaptiveLattice<D>(level, 3, nearSphere);
+    NodeVectors<D> u(D, lattice.nodeCount());
+    for (std::size_t i = 0; i < lattice.nodeCount(); ++i) {
+        const Vec<D> x = lattice.nodePosition(i);
+        for (int a = 0; a < D; ++a)
+            u(a, Eigen::Index(i)) = lattice.isBoundaryNode(i) ? 0.0 : 0.01 * std::sin(7 * x[a] + a);
+    }
+    // Hanging values off their constraints (as a field that is not continuous): then the value
+    // at a node on a face depends on which cell is used, and the grid must use the cell that
+    // the interpolator's search finds.
+    for (std::size_t i = 0; i < lattice.nodeCount(); ++i)
+        if (lattice.isHangingNode(i)) u(0, Eigen::Index(i)) += 1e-3;
+    const openvdb::Vec3SGrid::Ptr grid = makeDeformationGrid<D>(lattice, u, UnitBoxPlacement());
+    const multiscale::PiecewiseLinearInterpolator<D> phi(lattice);
+    const double h = lattice.h();
+    std::size_t nodes = 0, different = 0;
+    for (auto v = grid->cbeginValueOn(); v; ++v) {
+        Vec<D> x, du;
+        for (int a = 0; a < D; ++a)
+            x[a] = v.getCoord()[a] * h;
+        ASSERT_TRUE(phi.evaluate(u, x, du));
+        for (int a = 0; a < D; ++a)
+            if (v.getValue()[a] != float(du[a])) ++different;
+        ++nodes;
+    }
+    EXPECT_EQ(nodes, std::size_t(std::pow((1 << level) + 1, D)));
+    EXPECT_EQ(different, 0u);
+}
+
 } // namespace
+
+TEST(DeformationField, EveryNodeIsTheInterpolatorsValue2D)
+{
+    checkEveryNodeIsTheSearch<2>();
+}
+TEST(DeformationField, EveryNodeIsTheInterpolatorsValue3D)
+{
+    checkEveryNodeIsTheSearch<3>();
+}
 
 TEST(DeformationField, ReproducesAdaptiveLatticeMap2D)
 {

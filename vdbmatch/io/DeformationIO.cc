@@ -70,6 +70,34 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
         }
         return ci;
     };
+    // For a leaf inside the cell, whether its nodes on the cell's lower face along axis a, and
+    // on no other face of the cell, are located in the cell by the search as well: yes if no
+    // cell across that face is finer (the search tries the finer sizes first, and at the cell's
+    // own size the cell itself first). That holds if one cell, at least as large, contains the
+    // layer across the leaf's face in the open sense, or if the face is the boundary of Omega.
+    auto lowerFaceInCell = [&](typename Interpolator::Cursor& cursor, const Cell& c,
+                               const openvdb::Coord& origin, int a) {
+        if (c.origin[a] == 0) return true;
+        // The leaf's nodes on that face, lattice index units: lo..hi along the other axes.
+        std::array<int, D> lo, hi;
+        Vec<D> probe;
+        for (int b = 0; b < D; ++b) {
+            lo[b] = std::max(origin[b] * scale, c.origin[b] + 1);
+            hi[b] = std::min(origin[b] + int(LeafT::DIM) - 1, n) * scale;
+            probe[b] = 0.5 * (lo[b] + hi[b]) / lattice.resolution();
+        }
+        probe[a] = (c.origin[a] - 0.5) / lattice.resolution();
+        const int32_t across = cursor.cell(probe);
+        if (across < 0) return false;
+        const Cell& other = lattice.cells()[std::size_t(across)];
+        if (other.log2Size < c.log2Size) return false;
+        const int side = 1 << other.log2Size;
+        for (int b = 0; b < D; ++b) {
+            if (b == a) continue;
+            if (!(other.origin[b] < lo[b] && hi[b] < other.origin[b] + side)) return false;
+        }
+        return true;
+    };
     const int leaves1 = (n + 1 + int(LeafT::DIM) - 1) / int(LeafT::DIM);
     const int leavesZ = D == 3 ? leaves1 : 1;
     const std::size_t leafCount =
@@ -93,6 +121,11 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
             // on its lower faces are searched.
             const int32_t cellIndex = leafCell(cursor, origin);
             const Cell* cell = cellIndex >= 0 ? &lattice.cells()[std::size_t(cellIndex)] : nullptr;
+            std::array<bool, D> faceInCell{};
+            if (cell) {
+                for (int a = 0; a < D; ++a)
+                    faceInCell[a] = lowerFaceInCell(cursor, *cell, origin, a);
+            }
             for (int k = 0; k < zEnd; ++k) {
                 for (int j = 0; j < int(LeafT::DIM); ++j) {
                     for (int i = 0; i < int(LeafT::DIM); ++i) {
@@ -102,9 +135,14 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                         for (int a = 0; a < D; ++a)
                             x[a] = ijk[a] * H;
                         Vec<D> du = Vec<D>::Zero();
+                        // In the open interior of the cell, or on one lower face of it that
+                        // faceInCell admits.
                         bool interior = cell != nullptr;
-                        for (int a = 0; a < D && interior; ++a)
-                            interior = ijk[a] * scale > cell->origin[a];
+                        int faces = 0;
+                        for (int a = 0; a < D && interior; ++a) {
+                            if (ijk[a] * scale > cell->origin[a]) continue;
+                            interior = ++faces == 1 && faceInCell[a];
+                        }
                         if (interior) {
                             typename Interpolator::Location loc;
                             phi.locateInCell(std::size_t(cellIndex), x, loc);
