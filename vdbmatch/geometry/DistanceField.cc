@@ -296,6 +296,9 @@ toIndexMesh(const Surface<3>& s, double invH)
     return m;
 }
 
+/// Slots of exactBand's table of the triangles evaluated for a voxel (a power of two).
+constexpr size_t VISIT_TABLE_SIZE = 256;
+
 /// Bound on the steps of the descent over the mesh in exactBand (the start is the nearest of the
 /// polygons meshToVolume found for the voxel and its neighbours, a few triangles from the
 /// nearest one).
@@ -336,16 +339,29 @@ exactBand(openvdb::FloatGrid& grid, const openvdb::Int32Grid& polygonIndex, cons
     openvdb::tree::LeafManager<openvdb::FloatTree> leaves(grid.tree());
     detail::forEachIndex(leaves.leafCount(), threaded, [&](size_t l) {
         auto index = polygonIndex.getConstAccessor();
-        std::vector<int32_t> evaluated;
-        auto firstVisit = [&evaluated](int32_t t) {
-            if (std::find(evaluated.begin(), evaluated.end(), t) != evaluated.end()) return false;
-            evaluated.push_back(t);
+        // Triangles already evaluated for this voxel, in a direct-mapped table (a collision only
+        // evaluates a triangle again). That never changes the result: a triangle evaluated again
+        // gives the same distance, which cannot beat (or tie with a lower index) the best one
+        // that its first evaluation left. Entries of earlier voxels are told apart by the voxel
+        // counter.
+        struct Visit
+        {
+            int32_t triangle = -1;
+            uint32_t voxel = 0;
+        };
+        std::array<Visit, VISIT_TABLE_SIZE> visits{};
+        uint32_t voxel = 0;
+        auto firstVisit = [&visits, &voxel](int32_t t) {
+            Visit& v = visits[size_t(t) & (VISIT_TABLE_SIZE - 1)];
+            if (v.voxel == voxel && v.triangle == t) return false;
+            v.triangle = t;
+            v.voxel = voxel;
             return true;
         };
         for (auto it = leaves.leaf(l).beginValueOn(); it; ++it) {
             const openvdb::Coord ijk = it.getCoord();
             const openvdb::Vec3d p = ijk.asVec3d();
-            evaluated.clear();
+            ++voxel;
             double best = std::numeric_limits<double>::max();
             int32_t bestT = -1;
             for (int dz = -1; dz <= 1; ++dz)
