@@ -98,6 +98,13 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
         }
         return true;
     };
+    // The locations of the points of a cell, per cell size up to 32 lattice voxels (32^3
+    // entries): the leaves inside one cell read them instead of locating every node.
+    constexpr int MAX_TABLE_LOG2_SIZE = 5;
+    std::vector<std::vector<typename Interpolator::Location>> tables(MAX_TABLE_LOG2_SIZE + 1);
+    for (const Cell& c : lattice.cells())
+        if (c.log2Size <= MAX_TABLE_LOG2_SIZE && tables[std::size_t(c.log2Size)].empty())
+            tables[std::size_t(c.log2Size)] = Interpolator::cellTable(c.log2Size);
     const int leaves1 = (n + 1 + int(LeafT::DIM) - 1) / int(LeafT::DIM);
     const int leavesZ = D == 3 ? leaves1 : 1;
     const std::size_t leafCount =
@@ -122,9 +129,16 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
             const int32_t cellIndex = leafCell(cursor, origin);
             const Cell* cell = cellIndex >= 0 ? &lattice.cells()[std::size_t(cellIndex)] : nullptr;
             std::array<bool, D> faceInCell{};
+            const typename Interpolator::Location* table = nullptr;
+            std::array<Vec<D>, SimplexLattice<D>::CORNERS> corner;
             if (cell) {
                 for (int a = 0; a < D; ++a)
                     faceInCell[a] = lowerFaceInCell(cursor, *cell, origin, a);
+                if (cell->log2Size <= MAX_TABLE_LOG2_SIZE) {
+                    table = tables[std::size_t(cell->log2Size)].data();
+                    for (std::size_t c = 0; c < corner.size(); ++c)
+                        corner[c] = u.col(cell->corners[c]);
+                }
             }
             for (int k = 0; k < zEnd; ++k) {
                 for (int j = 0; j < int(LeafT::DIM); ++j) {
@@ -143,7 +157,17 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
                             if (ijk[a] * scale > cell->origin[a]) continue;
                             interior = ++faces == 1 && faceInCell[a];
                         }
-                        if (interior) {
+                        if (interior && table) {
+                            // locateInCell and interpolate, read from the table.
+                            const int side = 1 << cell->log2Size;
+                            int entry = 0;
+                            for (int a = D - 1; a >= 0; --a)
+                                entry = entry * side + (ijk[a] * scale - cell->origin[a]);
+                            const auto& loc = table[entry];
+                            for (int m = 0; m <= D; ++m)
+                                if (loc.weights[m] != 0)
+                                    du += loc.weights[m] * corner[loc.nodes[m]];
+                        } else if (interior) {
                             typename Interpolator::Location loc;
                             phi.locateInCell(std::size_t(cellIndex), x, loc);
                             du = Interpolator::interpolate(u, loc);

@@ -124,6 +124,33 @@ PiecewiseLinearInterpolator<D>::locateInCell(std::size_t cellIndex, const Vec<D>
 }
 
 template <int D>
+std::vector<typename PiecewiseLinearInterpolator<D>::Location>
+PiecewiseLinearInterpolator<D>::cellTable(int log2Size)
+{
+    // A cell at the origin whose corner c is node c: simplexIn's t = (p - origin) / side is then
+    // l / side, exactly as for any cell of this size at any origin (integers, a power of two).
+    typename SimplexLattice<D>::Cell cell{};
+    cell.log2Size = log2Size;
+    for (int c = 0; c < SimplexLattice<D>::CORNERS; ++c)
+        cell.corners[std::size_t(c)] = c;
+    const std::size_t side = std::size_t(1) << log2Size;
+    std::size_t count = 1;
+    for (int a = 0; a < D; ++a)
+        count *= side;
+    std::vector<Location> table(count);
+    for (std::size_t e = 0; e < count; ++e) {
+        Vec<D> p;
+        std::size_t rest = e;
+        for (int a = 0; a < D; ++a) {
+            p[a] = Real(rest % side);
+            rest /= side;
+        }
+        simplexIn(cell, p, table[e]);
+    }
+    return table;
+}
+
+template <int D>
 template <typename CellAt>
 bool
 PiecewiseLinearInterpolator<D>::locateWith(const Vec<D>& x, Location& loc, CellAt&& cellAt,

@@ -87,6 +87,12 @@ public:
     /// cell contains such a point); for many points of one cell it saves the search.
     void locateInCell(std::size_t cellIndex, const Vec<D>& x, Location& loc) const;
 
+    /// The locations of the lattice-index points of a cell of side 2^log2Size, from its origin:
+    /// entry l_0 + S (l_1 + S l_2) (S = 2^log2Size, 0 <= l_a < S) holds the weights and, as
+    /// nodes, the corner indices (bit a: the upper corner along axis a) that locateInCell()
+    /// gives at origin + l, to the last bit. For many points of cells of one size.
+    static std::vector<Location> cellTable(int log2Size);
+
 private:
     /// locate() with @a cellAt(s, ijk) giving the index of the cell of side 2^s at ijk (or -1);
     /// the index of the cell found goes to @a found if given.
