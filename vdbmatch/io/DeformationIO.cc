@@ -123,9 +123,10 @@ makeDeformationGrid(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
             auto leaf = std::make_unique<LeafT>(origin, openvdb::Vec3s(0.0f), false);
             const int zEnd = D == 3 ? int(LeafT::DIM) : 1;
             // Most leaves lie inside one lattice cell (far from the shapes the cells are larger
-            // than a leaf): then the nodes in the cell's open interior are located in it
-            // directly, which is what the search would find (locateInCell), and only the nodes
-            // on its lower faces are searched.
+            // than a leaf): then the nodes in the cell's open interior, and those on one lower
+            // face of it that lowerFaceInCell admits, are located in it directly (from the
+            // cell size's table), which is what the search would find; only the other nodes on
+            // its lower faces are searched.
             const int32_t cellIndex = leafCell(cursor, origin);
             const Cell* cell = cellIndex >= 0 ? &lattice.cells()[std::size_t(cellIndex)] : nullptr;
             std::array<bool, D> faceInCell{};
