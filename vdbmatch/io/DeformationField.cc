@@ -68,7 +68,6 @@ inline void
 kuhnLocate(int dim, int sliceK, const openvdb::Vec3d& p, openvdb::Coord* vertices, double* weights,
            int* axes)
 {
-    const int mDim = dim;
     openvdb::Coord origin;
     std::array<double, 3> t{{0, 0, 0}};
     for (int a = 0; a < 3; ++a) {
@@ -76,23 +75,23 @@ kuhnLocate(int dim, int sliceK, const openvdb::Vec3d& p, openvdb::Coord* vertice
         origin[a] = int(f);
         t[a] = p[a] - f;
     }
-    if (mDim == 2) {
+    if (dim == 2) {
         origin[2] = sliceK;
         t[2] = 0;
     }
     // Axes by decreasing t (ties: lower axis first, any choice gives the same value).
     // (Insertion sort: stable, and unlike std::stable_sort it never allocates a buffer.)
     std::array<int, 3> order{{0, 1, 2}};
-    for (int i = 1; i < mDim; ++i)
+    for (int i = 1; i < dim; ++i)
         for (int j = i; j > 0 && t[order[j]] > t[order[j - 1]]; --j)
             std::swap(order[j], order[j - 1]);
     vertices[0] = origin;
     weights[0] = 1.0 - t[order[0]];
-    for (int m = 1; m <= mDim; ++m) {
+    for (int m = 1; m <= dim; ++m) {
         vertices[m] = vertices[m - 1];
         vertices[m][order[m - 1]] += 1;
         axes[m - 1] = order[m - 1];
-        weights[m] = m < mDim ? t[order[m - 1]] - t[order[m]] : t[order[mDim - 1]];
+        weights[m] = m < dim ? t[order[m - 1]] - t[order[m]] : t[order[dim - 1]];
     }
 }
 
