@@ -41,15 +41,6 @@ using detail::quoted;
 
 using detail::lowerExtension;
 
-/// The whole file as bytes.
-/// @throw openvdb::IoError if it is missing, a directory or unreadable
-std::string
-readBytes(const std::string& path, const std::string& caller)
-{
-    const std::string where = caller + ": file " + quoted(path);
-    return readInputFile(path, where);
-}
-
 /// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
 class ParseError
 {
@@ -359,7 +350,7 @@ MeshDocument::read(const std::string& path)
 {
     MeshDocument doc;
     doc.mPath = path;
-    doc.mBytes = readBytes(path, "MeshDocument::read");
+    doc.mBytes = readInputFile(path, "MeshDocument::read: file " + quoted(path));
     const ParseError error("MeshDocument::read", path);
     const std::string ext = lowerExtension(path);
     if (ext != ".obj" && ext != ".ply" && ext != ".stl") {

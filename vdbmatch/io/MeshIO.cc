@@ -40,15 +40,6 @@ using detail::quoted;
 
 using detail::lowerExtension;
 
-/// The whole file as bytes.
-/// @throw openvdb::IoError if it is missing, a directory or unreadable
-std::string
-readBytes(const std::string& path, const std::string& caller)
-{
-    const std::string where = caller + ": file " + quoted(path);
-    return readInputFile(path, where);
-}
-
 /// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
 class ParseError
 {
@@ -595,7 +586,7 @@ parseStl(const std::string& text, const ParseError& error)
 Surface<3>
 readMesh(const std::string& path)
 {
-    const std::string text = readBytes(path, "readMesh");
+    const std::string text = readInputFile(path, "readMesh: file " + quoted(path));
     const ParseError error("readMesh", path);
     const std::string ext = lowerExtension(path);
     Surface<3> s;
@@ -615,7 +606,7 @@ readMesh(const std::string& path)
 Surface<2>
 readPolyline(const std::string& path)
 {
-    const std::string text = readBytes(path, "readPolyline");
+    const std::string text = readInputFile(path, "readPolyline: file " + quoted(path));
     const ParseError error("readPolyline", path);
     const std::string ext = lowerExtension(path);
     if (ext != ".polyline" && ext != ".txt") {
