@@ -78,7 +78,9 @@ constexpr int DEFAULT_MATCH_SURFACE_LEVELS = 1;
 /// ends the finest level only. With 7 it also ends level 7 of the default levels 4..8 once the
 /// surface has settled (starfish: 19 iterations instead of 78, the whole match 27.9 s instead of
 /// 35.6 s); on the accuracy benchmark at 4..8 the mean error moved by -1%..+6% but
-/// |psi o phi - Id| by -13%..+27%, so it is an option, not the default (docs/performance.md).
+/// |psi o phi - Id| by -13%..+27%; repeated with a last-digit control of each variant, the mean
+/// error rose on 5 of 6 pairs (1-6%) and |psi o phi - Id| on 4 (9-24%) on both runs, so it is
+/// an option, not the default (docs/performance.md).
 /// Ending level 6 the same way (7 at levels 4..7) cost 6-19% correspondence error: the coarser
 /// levels set the correspondence in their slow tail (docs/numerics.md).
 constexpr int DEFAULT_MATCH_SURFACE_FROM_LEVEL = 0;
