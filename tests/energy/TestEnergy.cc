@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <limits>
 
 using namespace vdbmatch;
 using namespace vdbmatch::test;
@@ -221,6 +222,66 @@ TEST(Energy, CellCullingIsExact3D)
 TEST(Energy, CellCullingIsExact2D)
 {
     checkCullingIsExact<2>(6);
+}
+
+namespace {
+
+/// The inverse-band samples kept between evaluations (Energy::inInverseBand) change nothing:
+/// along a path of small steps (a tenth of a cell, as a descent takes them) that carries
+/// simplices into and out of the band of M2, every evaluation of the energy that kept its
+/// samples is bitwise that of a new energy, which samples every simplex.
+template <int D>
+void
+checkKeptInverseBandIsExact(int level)
+{
+    const EnergyParameters params = EnergyParameters::defaults(D);
+    MatchingProblem<D> P(level, sourceSdf<D>(level), targetSdf<D>(level), params,
+                         EnergyKind::Symmetric);
+    const Real h = P.lattice->h();
+    // A smooth bump of 2.5 cells, reached in 25 steps.
+    NodeVectors<D> bump(D, P.lattice->nodeCount());
+    for (std::size_t i = 0; i < P.lattice->nodeCount(); ++i) {
+        const Vec<D> x = P.lattice->nodePosition(i);
+        Real b = 2.5 * h;
+        for (int a = 0; a < D; ++a)
+            b *= std::sin(M_PI * x[a]);
+        bump.col(i) = b * Vec<D>::Ones();
+    }
+    constexpr int STEPS = 25;
+    std::size_t fewest = std::numeric_limits<std::size_t>::max(), most = 0;
+    for (int k = 0; k <= STEPS; ++k) {
+        const NodeVectors<D> u = (Real(k) / STEPS) * bump;
+        EnergyTerms kept, fresh;
+        NodeVectors<D> gKept, gFresh;
+        // Value-only evaluations keep samples too: one between the gradients.
+        if (k % 2) P.energy->value(u, nullptr);
+        const Real eKept = P.energy->valueAndGradient(u, gKept, &kept);
+        const Energy<D> newEnergy(*P.lattice, *P.shape1, *P.shape2, params, EnergyKind::Symmetric);
+        const Real eFresh = newEnergy.valueAndGradient(u, gFresh, &fresh);
+        ASSERT_TRUE(std::isfinite(eFresh)) << "step " << k;
+        EXPECT_EQ(eKept, eFresh) << "step " << k;
+        EXPECT_EQ(kept.bandSimplices, fresh.bandSimplices) << "step " << k;
+        for (int t = 0; t < 2; ++t) {
+            EXPECT_EQ(kept.match[t], fresh.match[t]) << "step " << k;
+            EXPECT_EQ(kept.mem[t], fresh.mem[t]) << "step " << k;
+        }
+        EXPECT_EQ((gKept - gFresh).cwiseAbs().maxCoeff(), 0.0) << "step " << k;
+        fewest = std::min(fewest, fresh.bandSimplices);
+        most = std::max(most, fresh.bandSimplices);
+    }
+    // The path moves simplices across the band's edge (else the test would test nothing).
+    EXPECT_LT(fewest, most);
+}
+
+} // namespace
+
+TEST(Energy, KeptInverseBandSamplesAreExact3D)
+{
+    checkKeptInverseBandIsExact<3>(4);
+}
+TEST(Energy, KeptInverseBandSamplesAreExact2D)
+{
+    checkKeptInverseBandIsExact<2>(6);
 }
 
 TEST(Energy, ConstantOffsetIsTheEnergyOfTheIdentityForIdenticalShapes)

@@ -350,6 +350,36 @@ checkTierFallback()
     EXPECT_EQ(d, ref.d);
     EXPECT_NEAR(d, -0.15, 0.01); // coarse tier, h = 1/16
 
+    // The tier-reporting sampleDistance, and sameStencil (Energy's kept inverse-band samples):
+    // the same tier and stencil exactly when every tier up to the one used rounds both points to
+    // the same node.
+    for (const Vec<D>& x : {nearSurface, farInside}) {
+        int tier = -1;
+        ASSERT_TRUE(both->sampleDistance(x, dRef, tier));
+        ASSERT_TRUE(both->sampleDistance(x, d));
+        EXPECT_EQ(d, dRef);
+        EXPECT_EQ(tier, both->findTier(x));
+        Vec<D> nudged = x;
+        nudged[1] += 1e-4;
+        EXPECT_TRUE(both->sameStencil(nudged, x, tier));
+        EXPECT_FALSE(both->sameStencil(nudged, x, -1));
+        EXPECT_FALSE(both->sameStencil(nudged, x, 2));
+        EXPECT_FALSE(both->sameStencil(notFinite, x, tier));
+    }
+    // nearSurface rounds to fine node 51 along x (h = 1/64); 0.805 rounds to 52.
+    Vec<D> acrossFine = nearSurface;
+    acrossFine[0] = 0.805;
+    EXPECT_FALSE(both->sameStencil(acrossFine, nearSurface, 0));
+    // farInside (x = 0.65) rounds to coarse node 10 (h = 1/16) and fine node 42; 0.655 to the
+    // same two; 0.648 to coarse node 10 but fine node 41: a finer tier's rounding decides as
+    // well, since its stencil could be complete there.
+    Vec<D> sameCoarse = farInside, acrossFineOnly = farInside;
+    sameCoarse[0] = 0.655;
+    acrossFineOnly[0] = 0.648;
+    EXPECT_TRUE(both->sameStencil(sameCoarse, farInside, 1));
+    EXPECT_FALSE(both->sameStencil(acrossFineOnly, farInside, 1));
+    EXPECT_TRUE(coarseOnly->sameStencil(acrossFineOnly, farInside, 0));
+
     for (const Vec<D>& x : {outsideBox, notFinite}) {
         EXPECT_EQ(both->findTier(x), -1);
         EXPECT_FALSE(both->sampleDistance(x, d));

@@ -212,6 +212,30 @@ Energy<D>::cellMayReachBand2(const Vec<D>& origin, Real side,
     return std::abs(d2) < mSigma + std::sqrt(R2) + CULL_SLACK_VOXELS * voxel;
 }
 
+template <int D>
+inline bool
+Energy<D>::inInverseBand(const Vec<D>& y, InverseBandSample* last) const
+{
+    if (last && last->tier >= 0 && mShape2->sameStencil(y, last->y, last->tier)) {
+        // |d2(y)| >= |d2(last.y)| - slope |y - last.y| (same polynomial on the segment); the
+        // relative margin covers the rounding of the interpolation.
+        const Real bound = Real(last->absD2) - INVERSE_BAND_SLOPE * (y - last->y).norm();
+        if (bound >= mSigma * (1 + 1e-9)) return false;
+    }
+    Real d2;
+    int tier = -1;
+    if (!mShape2->sampleDistance(y, d2, tier)) throwOutside("shape 2", y.data(), D);
+    if (last) {
+        const Real absD2 = std::abs(d2);
+        float rounded = float(absD2);
+        if (Real(rounded) > absD2) rounded = std::nextafter(rounded, 0.0f);
+        last->y = y;
+        last->absD2 = rounded;
+        last->tier = tier;
+    }
+    return BandWeight(mSigma).inBand(d2);
+}
+
 // flatten: the kinematics, densities and frame maps are inlined into the loop over simplices
 // (the same operations in the same order, so the same bits; value and gradient ~15% faster,
 // docs/performance.md). In 3D the loop also has an x86-64-v3 (AVX2) clone, chosen at load time
@@ -223,25 +247,25 @@ template <int D>
 template <bool Grad>
 void __attribute__((flatten))
 Energy<D>::evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& t,
-                         NodeVectors<D>* perSlot) const
+                         NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const
 {
-    evaluateBlockBody<Grad>(blockIndex, u, t, perSlot);
+    evaluateBlockBody<Grad>(blockIndex, u, t, perSlot, inverseBand);
 }
 
 template <int D>
 template <bool Grad>
 void __attribute__((flatten)) VDBMATCH_X86_64_V3_CLONES
 Energy<D>::evaluateBlockClones(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& t,
-                               NodeVectors<D>* perSlot) const
+                               NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const
 {
-    evaluateBlockBody<Grad>(blockIndex, u, t, perSlot);
+    evaluateBlockBody<Grad>(blockIndex, u, t, perSlot, inverseBand);
 }
 
 template <int D>
 template <bool Grad>
 void
 Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& t,
-                             NodeVectors<D>* perSlot) const
+                             NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const
 {
     using namespace energy;
     constexpr int NC = SimplexLattice<D>::CORNERS;
@@ -319,11 +343,8 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
             g.eta2 = 0;
             g.eta2Derivative = 0;
             bool inBand2 = false;
-            if (mayReachBand2 && !inBand1) {
-                Real d2;
-                if (!mShape2->sampleDistance(y, d2)) throwOutside("shape 2", y.data(), D);
-                inBand2 = band.inBand(d2);
-            }
+            if (mayReachBand2 && !inBand1)
+                inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
             Vec<D> dy = Vec<D>::Zero();
             if (inBand1 || inBand2) {
                 ++t.bandSimplices;
@@ -380,6 +401,15 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
     typename detail::ScratchBuffer<NodeVectors<D>>::Lease slotLease(mSlotBuffer);
     NodeVectors<D>& perSlot = *slotLease;
     if constexpr (Grad) perSlot.resize(D, L.slotNodes().size());
+    // The kept inverse-band samples, when this evaluation holds them (none yet: every entry
+    // says "sample"); the symmetric energy only.
+    typename detail::ScratchBuffer<std::vector<InverseBandSample>>::Lease bandLease(
+        mInverseBandBuffer);
+    InverseBandSample* inverseBand = nullptr;
+    if (mKind == EnergyKind::Symmetric && bandLease.reused()) {
+        if (bandLease->size() != L.simplexCount()) bandLease->assign(L.simplexCount(), {});
+        inverseBand = bandLease->data();
+    }
     bool interrupted = false;
     auto body = [&](const tbb::blocked_range<std::size_t>& r) {
         if (interrupter && interrupter->wasInterrupted()) {
@@ -393,9 +423,9 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
                 perSlot.middleCols(block.slotBegin, block.slotEnd - block.slotBegin).setZero();
             }
             if constexpr (D == 3)
-                evaluateBlockClones<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr);
+                evaluateBlockClones<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr, inverseBand);
             else
-                evaluateBlock<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr);
+                evaluateBlock<Grad>(b, u, partial[b], Grad ? &perSlot : nullptr, inverseBand);
         }
     };
     const tbb::blocked_range<std::size_t> range(0, L.blocks().size(), 1);

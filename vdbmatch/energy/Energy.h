@@ -102,6 +102,15 @@ public:
     void setLandmarks(const energy::LandmarkTerm<D>* landmarks) { mLandmarks = landmarks; }
 
 private:
+    /// The last sample of d2 of the inverse-band test at a simplex: where (y), |d2| there
+    /// (rounded towards 0) and the tier of shape 2 used (-1: none yet).
+    struct InverseBandSample
+    {
+        Vec<D> y;
+        float absD2 = 0;
+        int32_t tier = -1;
+    };
+
     template <bool Grad>
     Real evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTerms* terms,
                   bool threaded, openvdb::util::NullInterrupter* interrupter) const;
@@ -110,13 +119,24 @@ private:
     /// (evaluateBlockClones); the same bits either way (Energy.cc).
     template <bool Grad>
     void evaluateBlock(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
-                       NodeVectors<D>* perSlot) const;
+                       NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const;
     template <bool Grad>
     void evaluateBlockClones(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
-                             NodeVectors<D>* perSlot) const;
+                             NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const;
     template <bool Grad>
     void evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, EnergyTerms& terms,
-                           NodeVectors<D>* perSlot) const;
+                           NodeVectors<D>* perSlot, InverseBandSample* inverseBand) const;
+    /// |d2(y)| < sigma at the deformed centroid y of a simplex outside the band of M1 (the
+    /// inverse-band test). With @a last (that simplex's entry of the kept samples, or null), d2
+    /// is not sampled when the last sample bounds it: same tier and stencil, and
+    /// |d2(last.y)| - INVERSE_BAND_SLOPE |y - last.y| >= sigma. y moves by hundredths of a cell
+    /// between evaluations, so this drops almost every sample (about half the simplices of a
+    /// fine level take this test, and one in a thousand is in the band). The answer is the
+    /// same either way.
+    bool inInverseBand(const Vec<D>& y, InverseBandSample* last) const;
+    /// Bound on the slope of the interpolated d2 used by inInverseBand: sqrt(D) times 2, twice
+    /// what the node values of an exact distance allow (FieldSampler::sameStencil).
+    static constexpr Real INVERSE_BAND_SLOPE = 4;
 
     /// Shape-1 geometry at the centroid of a simplex inside the band of M1: it does not depend on
     /// phi, so it is sampled once, when the Energy is built. T+ and T- are stored as packed
@@ -148,6 +168,9 @@ private:
     /// descent does not allocate (and fault in) tens of MB per iteration. One buffer; an
     /// evaluation that finds it taken (a concurrent one) allocates its own.
     detail::ScratchBuffer<NodeVectors<D>> mSlotBuffer;
+    /// The last inverse-band sample per simplex (inInverseBand), kept between evaluations; an
+    /// evaluation that finds it taken (a concurrent one) samples every simplex.
+    detail::ScratchBuffer<std::vector<InverseBandSample>> mInverseBandBuffer;
 
     const SimplexLattice<D>* mLattice;
     std::vector<int32_t> mSourceIndex; ///< per simplex (cell * SIMPLICES + p): index or -1

@@ -347,6 +347,36 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) c
 
 template <int D>
 __attribute__((flatten)) bool
+FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, int& tierIndex) const
+{
+    Real t[D];
+    const float* base = locate(x, t, tierIndex);
+    if (base == nullptr) return false;
+    double w[D][3];
+    for (int a = 0; a < D; ++a)
+        splineWeights(t[a], w[a]);
+    d = interpolateDistance<D>(base, w);
+    return true;
+}
+
+template <int D>
+bool
+FieldSampler<D>::sameStencil(const Vec<D>& x, const Vec<D>& x0, int tierIndex) const
+{
+    if (tierIndex < 0 || size_t(tierIndex) >= mTiers.size()) return false;
+    // locate() picks the first tier whose stencil around round(x / h) is complete: the same
+    // rounding in every tier up to this one gives the same choice and the same stencil.
+    // (Compared as doubles: a NaN position compares unequal.)
+    for (int ti = 0; ti <= tierIndex; ++ti) {
+        const Real invH = mTiers[size_t(ti)]->invH;
+        for (int a = 0; a < D; ++a)
+            if (!(std::floor(x[a] * invH + HALF) == std::floor(x0[a] * invH + HALF))) return false;
+    }
+    return true;
+}
+
+template <int D>
+__attribute__((flatten)) bool
 FieldSampler<D>::sample(const Vec<D>& x, RawFields<D>& fields, RawFieldDerivatives<D>* deriv) const
 {
     constexpr int NC = NUM_COMPONENTS;

@@ -104,6 +104,16 @@ public:
     bool sampleDistance(const Vec<D>& x, Real& d) const;
     /// As above, and the voxel size of the tier used (Omega units).
     bool sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const;
+    /// As above, and the index of the tier used (for sameStencil()).
+    bool sampleDistance(const Vec<D>& x, Real& d, int& tierIndex) const;
+
+    /// True if a query at x uses tier @a tierIndex with the same 3^D nodes as a query at @a x0
+    /// that used that tier: every tier up to it rounds x and x0 to the same node. The
+    /// interpolated d is then one quadratic polynomial on the segment from x0 to x, and along
+    /// each axis its slope is a convex combination of the differences of adjacent node values
+    /// divided by the voxel size (at most 1 for exact distances), so
+    /// |d(x) - d(x0)| <= sqrt(D) max_a max |d_{i+e_a} - d_i| / h |x - x0|.
+    bool sameStencil(const Vec<D>& x, const Vec<D>& x0, int tierIndex) const;
 
     /// Interpolated d, n, R at x and, if @a deriv is not null, their derivatives. Returns false
     /// (leaving the outputs untouched) if no tier covers x. No allocation.
