@@ -331,22 +331,6 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d) const
 // flatten (here and in sample()): locate() and the interpolation inlined, the same bits.
 template <int D>
 __attribute__((flatten)) bool
-FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const
-{
-    Real t[D];
-    int tier = -1;
-    const float* base = locate(x, t, tier);
-    if (base == nullptr) return false;
-    if (tierVoxelSize) *tierVoxelSize = mTiers[size_t(tier)]->h;
-    double w[D][3];
-    for (int a = 0; a < D; ++a)
-        splineWeights(t[a], w[a]);
-    d = interpolateDistance<D>(base, w);
-    return true;
-}
-
-template <int D>
-__attribute__((flatten)) bool
 FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, int& tierIndex) const
 {
     Real t[D];
@@ -356,6 +340,16 @@ FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, int& tierIndex) const
     for (int a = 0; a < D; ++a)
         splineWeights(t[a], w[a]);
     d = interpolateDistance<D>(base, w);
+    return true;
+}
+
+template <int D>
+__attribute__((flatten)) bool
+FieldSampler<D>::sampleDistance(const Vec<D>& x, Real& d, Real* tierVoxelSize) const
+{
+    int tier = -1;
+    if (!sampleDistance(x, d, tier)) return false;
+    if (tierVoxelSize) *tierVoxelSize = mTiers[size_t(tier)]->h;
     return true;
 }
 
