@@ -3,6 +3,7 @@
 
 #include <vdbmatch/CpuClones.h>
 #include <vdbmatch/energy/BendingTerm.h>
+#include <vdbmatch/energy/CellKinematics.h>
 #include <vdbmatch/energy/MatchTerm.h>
 #include <vdbmatch/energy/MembraneTerm.h>
 #include <vdbmatch/energy/VolumeTerm.h>
@@ -282,8 +283,15 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
     PointGeometry<D> g;
     RawFields<D> raw2;
     RawFieldDerivatives<D> deriv2;
+    // The kinematics and the symmetric volume term of the cell's simplices, lane by lane (the
+    // same bits as SimplexKinematics and VolumeTerm.h, CellKinematics.h); the band terms then
+    // go simplex by simplex.
+    constexpr int NS = SimplexLattice<D>::SIMPLICES;
+    CellKinematics<D> ck;
+    std::array<Vec<D>, NS> yc;
+    std::array<Vec<D>, NS> dyc;
     // Centroid of simplex p of a cell: origin + side * centroidOffset[p] (the same as centroid()).
-    std::array<Vec<D>, SimplexLattice<D>::SIMPLICES> centroidOffset;
+    std::array<Vec<D>, NS> centroidOffset;
     for (std::size_t p = 0; p < paths.size(); ++p) {
         centroidOffset[p].setZero();
         for (int m = 0; m <= D; ++m)
@@ -307,7 +315,7 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
         const int32_t* slots = L.cellSlots().data() + ci * NC;
         const bool mayReachBand2 = symmetric && cellMayReachBand2(origin, side, uc);
 
-        for (std::size_t p = 0; p < paths.size(); ++p) {
+        for (int p = 0; p < NS; ++p) {
             const auto& path = paths[p];
             const auto& axis = axes[p];
             // D phi: column pi(m) is (phi(v_m) - phi(v_{m-1})) / side.
@@ -317,66 +325,86 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
                 ubar += uc[path[m]];
                 if (m > 0) A.col(axis[m]) += (uc[path[m]] - uc[path[m - 1]]) * invSide;
             }
-            const std::size_t simplex = ci * paths.size() + p;
+            for (int i = 0; i < D; ++i)
+                for (int j = 0; j < D; ++j)
+                    ck.A[i][j][p] = A(i, j);
             const Vec<D> x = origin + side * centroidOffset[p];
-            const Vec<D> y = x + ubar / Real(D + 1);
+            yc[p] = x + ubar / Real(D + 1);
+        }
+        ck.kinematics();
+        if (symmetric)
+            ck.template symmetricVolume<Grad>(mVolumeWeight);
+        else if constexpr (Grad)
+            ck.zeroGradient();
 
-            const SimplexKinematics<D> k(A);
-            if (!(k.J > 0)) {
+        for (int p = 0; p < NS; ++p) {
+            if (!(ck.J[p] > 0)) {
                 ++t.invertedSimplices;
                 continue;
             }
-            DensityGradient<D> dg;
-            DensityGradient<D>* dgp = Grad ? &dg : nullptr;
-
             if (symmetric) {
-                t.vol[0] += volume * volumeDirect<D, Grad>(k, mVolumeWeight, dgp);
-                t.vol[1] += volume * volumeInverse<D, Grad>(k, mVolumeWeight, dgp);
-            } else {
-                t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
+                t.vol[0] += volume * ck.volumeDirect[p];
+                t.vol[1] += volume * ck.volumeInverse[p];
             }
-
+            const std::size_t simplex = ci * NS + p;
+            const Vec<D>& y = yc[p];
             // Band membership: eta1 from the cache (fixed), eta2 from d2(y). Shape 2 is sampled
             // in full, with derivatives, only where a band term is active.
             const bool inBand1 = mSourceIndex[simplex] >= 0;
-            g.eta1 = 0;
-            g.eta2 = 0;
-            g.eta2Derivative = 0;
             bool inBand2 = false;
             if (mayReachBand2 && !inBand1)
                 inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
             Vec<D> dy = Vec<D>::Zero();
-            if (inBand1 || inBand2) {
-                ++t.bandSimplices;
-                if (cell.log2Size > 0) ++t.coarseBandSimplices;
-                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
-                    throwOutside("shape 2", y.data(), D);
-                kinematics::makeFrame(raw2, g.f2);
-                sourceFrame(simplex, x, g.f1);
-                if (inBand1) g.eta1 = band(g.f1.d);
-                if (symmetric) g.eta2 = band(g.f2.d, g.eta2Derivative);
-                if (g.eta1 > 0) {
-                    t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
-                    t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);
-                    t.bend[0] += volume * bendingDirect<D, Grad>(k, g, mParams.cBend, dgp);
+            if (!symmetric || inBand1 || inBand2) {
+                const SimplexKinematics<D> k = ck.simplex(p);
+                DensityGradient<D> dg;
+                DensityGradient<D>* dgp = Grad ? &dg : nullptr;
+                if constexpr (Grad) ck.loadGradient(p, dg);
+                if (!symmetric)
+                    t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
+                if (inBand1 || inBand2) {
+                    ++t.bandSimplices;
+                    if (cell.log2Size > 0) ++t.coarseBandSimplices;
+                    if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
+                        throwOutside("shape 2", y.data(), D);
+                    kinematics::makeFrame(raw2, g.f2);
+                    sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
+                    g.eta1 = inBand1 ? band(g.f1.d) : 0;
+                    g.eta2 = 0;
+                    g.eta2Derivative = 0;
+                    if (symmetric) g.eta2 = band(g.f2.d, g.eta2Derivative);
+                    if (g.eta1 > 0) {
+                        t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
+                        t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);
+                        t.bend[0] += volume * bendingDirect<D, Grad>(k, g, mParams.cBend, dgp);
+                    }
+                    if (g.eta2 > 0) {
+                        t.match[1] += volume * matchInverse<D, Grad>(k, g, mMatchWeight, dgp);
+                        t.mem[1] += volume * membraneInverse<D, Grad>(k, g, mParams.cMem, dgp);
+                        t.bend[1] += volume * bendingInverse<D, Grad>(k, g, mParams.cBend, dgp);
+                    }
+                    if constexpr (Grad) dy = kinematics::frameAdjoint(raw2, deriv2, g.f2, dg.f2);
                 }
-                if (g.eta2 > 0) {
-                    t.match[1] += volume * matchInverse<D, Grad>(k, g, mMatchWeight, dgp);
-                    t.mem[1] += volume * membraneInverse<D, Grad>(k, g, mParams.cMem, dgp);
-                    t.bend[1] += volume * bendingInverse<D, Grad>(k, g, mParams.cBend, dgp);
-                }
-                if constexpr (Grad) dy = kinematics::frameAdjoint(raw2, deriv2, g.f2, dg.f2);
+                if constexpr (Grad) ck.storeGradient(p, dg);
             }
-            if constexpr (Grad) {
-                dg.finish(k);
-                // Chain rule to the simplex vertices: A.col(pi(m)) = (u_m - u_{m-1})/side,
-                // y = x + mean(u_m). Everything is multiplied by |T|.
-                auto& G = *perSlot;
-                const Vec<D> share = (volume / (D + 1)) * dy;
+            if constexpr (Grad) dyc[p] = dy;
+        }
+        if constexpr (Grad) {
+            ck.finish();
+            // Chain rule to the simplex vertices: A.col(pi(m)) = (u_m - u_{m-1})/side,
+            // y = x + mean(u_m). Everything is multiplied by |T|.
+            auto& G = *perSlot;
+            for (int p = 0; p < NS; ++p) {
+                if (!(ck.J[p] > 0)) continue;
+                const auto& path = paths[p];
+                const auto& axis = axes[p];
+                const Vec<D> share = (volume / (D + 1)) * dyc[p];
                 for (int m = 0; m <= D; ++m)
                     G.col(slots[path[m]]) += share;
                 for (int m = 1; m <= D; ++m) {
-                    const Vec<D> c = (volume * invSide) * dg.dA.col(axis[m]);
+                    Vec<D> c;
+                    for (int i = 0; i < D; ++i)
+                        c[i] = (volume * invSide) * ck.dA[i][axis[m]][p];
                     G.col(slots[path[m]]) += c;
                     G.col(slots[path[m - 1]]) -= c;
                 }

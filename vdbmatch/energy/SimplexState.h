@@ -20,6 +20,7 @@ template <int D> struct SimplexKinematics
     Mat<D> B; ///< A^{-1} = C^T / J
     Real J;   ///< det A
 
+    SimplexKinematics() = default;
     explicit SimplexKinematics(const Mat<D>& a) : A(a), C(math::cof(a))
     {
         J = (A.col(0).transpose() * C.col(0)).value();
