@@ -6,6 +6,7 @@
 
 #include <vdbmatch/io/InputFile.h>
 #include <vdbmatch/io/PathText.h>
+#include <vdbmatch/io/TextParsing.h>
 
 #include <openvdb/openvdb.h>
 
@@ -39,64 +40,12 @@ constexpr std::size_t NUMBER_CHARS = 32;
 
 using detail::quoted;
 
+using detail::isSpace;
 using detail::lowerExtension;
-
-/// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
-class ParseError
-{
-public:
-    ParseError(std::string caller, std::string path)
-        : mCaller(std::move(caller)), mPath(std::move(path))
-    {
-    }
-    [[noreturn]] void operator()(const std::string& problem, std::size_t line = 0) const
-    {
-        std::string m = mCaller + ": file " + quoted(mPath);
-        if (line > 0) m += ", line " + std::to_string(line);
-        OPENVDB_THROW(openvdb::ValueError, m + ": " + problem);
-    }
-
-private:
-    std::string mCaller, mPath;
-};
-
-bool
-isSpace(char c)
-{
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
-}
-
-/// Splits a line into whitespace-separated tokens (views into the line's text).
-void
-tokenize(std::string_view line, std::vector<std::string_view>& out)
-{
-    out.clear();
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && isSpace(line[i]))
-            ++i;
-        const std::size_t b = i;
-        while (i < line.size() && !isSpace(line[i]))
-            ++i;
-        if (i > b) out.push_back(line.substr(b, i - b));
-    }
-}
-
-bool
-parseDouble(std::string_view s, double& v)
-{
-    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
-}
-
-bool
-parseInt(std::string_view s, int64_t& v)
-{
-    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
-}
+using detail::parseDouble;
+using detail::ParseError;
+using detail::parseInt;
+using detail::tokenize;
 
 /// Iterates over the lines of a text, counting them from 1; lines exclude "\n" and "\r\n".
 class LineReader

@@ -4,6 +4,7 @@
 
 #include <vdbmatch/io/InputFile.h>
 #include <vdbmatch/io/PathText.h>
+#include <vdbmatch/io/TextParsing.h>
 
 #include <openvdb/openvdb.h>
 
@@ -38,62 +39,20 @@ constexpr int ROUND_TRIP_DIGITS = std::numeric_limits<double>::max_digits10;
 
 using detail::quoted;
 
+using detail::isSpace;
 using detail::lowerExtension;
-
-/// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
-class ParseError
-{
-public:
-    ParseError(std::string caller, std::string path) : mCaller(std::move(caller)), mPath(path) {}
-    [[noreturn]] void operator()(const std::string& problem, size_t line = 0) const
-    {
-        std::string m = mCaller + ": file " + quoted(mPath);
-        if (line > 0) m += ", line " + std::to_string(line);
-        OPENVDB_THROW(openvdb::ValueError, m + ": " + problem);
-    }
-    const std::string& path() const { return mPath; }
-
-private:
-    std::string mCaller, mPath;
-};
-
-bool
-isSpace(char c)
-{
-    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f';
-}
+using detail::parseDouble;
+using detail::ParseError;
+using detail::parseInt;
+using detail::tokenize;
 
 /// Splits a line into whitespace-separated tokens.
 std::vector<std::string_view>
 tokens(std::string_view line)
 {
     std::vector<std::string_view> out;
-    size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && isSpace(line[i]))
-            ++i;
-        const size_t b = i;
-        while (i < line.size() && !isSpace(line[i]))
-            ++i;
-        if (i > b) out.push_back(line.substr(b, i - b));
-    }
+    tokenize(line, out);
     return out;
-}
-
-bool
-parseDouble(std::string_view s, double& v)
-{
-    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
-}
-
-bool
-parseInt(std::string_view s, int64_t& v)
-{
-    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
 /// Iterates over the lines of a text, counting them from 1.

@@ -7,6 +7,7 @@
 
 #include <vdbmatch/io/InputFile.h>
 #include <vdbmatch/io/PathText.h>
+#include <vdbmatch/io/TextParsing.h>
 
 #include <openvdb/openvdb.h>
 
@@ -30,26 +31,9 @@ constexpr std::size_t NUMBER_CHARS = 32;
 /// The UTF-8 byte-order mark.
 constexpr std::string_view UTF8_BOM = "\xEF\xBB\xBF";
 
+using detail::parseDouble;
+using detail::ParseError;
 using detail::quoted;
-
-/// Throws ValueError "<caller>: file '<path>'[, line n]: <problem>".
-class ParseError
-{
-public:
-    ParseError(std::string caller, std::string path)
-        : mCaller(std::move(caller)), mPath(std::move(path))
-    {
-    }
-    [[noreturn]] void operator()(const std::string& problem, std::size_t line = 0) const
-    {
-        std::string m = mCaller + ": file " + quoted(mPath);
-        if (line > 0) m += ", line " + std::to_string(line);
-        OPENVDB_THROW(openvdb::ValueError, m + ": " + problem);
-    }
-
-private:
-    std::string mCaller, mPath;
-};
 
 bool
 isBlank(char c)
@@ -65,14 +49,6 @@ trim(std::string_view s)
     while (!s.empty() && isBlank(s.back()))
         s.remove_suffix(1);
     return s;
-}
-
-bool
-parseDouble(std::string_view s, double& v)
-{
-    if (!s.empty() && s[0] == '+') s.remove_prefix(1);
-    const auto r = std::from_chars(s.data(), s.data() + s.size(), v);
-    return r.ec == std::errc() && r.ptr == s.data() + s.size();
 }
 
 std::string
