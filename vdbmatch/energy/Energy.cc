@@ -290,6 +290,7 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
     CellKinematics<D> ck;
     std::array<Vec<D>, NS> yc;
     std::array<Vec<D>, NS> dyc;
+    std::array<bool, NS> banded{};
     // Centroid of simplex p of a cell: origin + side * centroidOffset[p] (the same as centroid()).
     std::array<Vec<D>, NS> centroidOffset;
     for (std::size_t p = 0; p < paths.size(); ++p) {
@@ -318,16 +319,18 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
         for (int p = 0; p < NS; ++p) {
             const auto& path = paths[p];
             const auto& axis = axes[p];
-            // D phi: column pi(m) is (phi(v_m) - phi(v_{m-1})) / side.
-            Mat<D> A = Mat<D>::Identity();
+            // D phi: column pi(m) is e_pi(m) + (phi(v_m) - phi(v_{m-1})) / side (written as
+            // the identity plus the difference, as Mat::Identity() and col() += would).
+            for (int i = 0; i < D; ++i)
+                for (int j = 0; j < D; ++j)
+                    ck.A[i][j][p] = i == j ? 1.0 : 0.0;
             Vec<D> ubar = Vec<D>::Zero();
             for (int m = 0; m <= D; ++m) {
                 ubar += uc[path[m]];
-                if (m > 0) A.col(axis[m]) += (uc[path[m]] - uc[path[m - 1]]) * invSide;
+                if (m > 0)
+                    for (int i = 0; i < D; ++i)
+                        ck.A[i][axis[m]][p] += (uc[path[m]][i] - uc[path[m - 1]][i]) * invSide;
             }
-            for (int i = 0; i < D; ++i)
-                for (int j = 0; j < D; ++j)
-                    ck.A[i][j][p] = A(i, j);
             const Vec<D> x = origin + side * centroidOffset[p];
             yc[p] = x + ubar / Real(D + 1);
         }
@@ -387,7 +390,10 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
                 }
                 if constexpr (Grad) ck.storeGradient(p, dg);
             }
-            if constexpr (Grad) dyc[p] = dy;
+            if constexpr (Grad) {
+                dyc[p] = dy;
+                banded[p] = inBand1 || inBand2;
+            }
         }
         if constexpr (Grad) {
             ck.finish();
@@ -398,9 +404,13 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
                 if (!(ck.J[p] > 0)) continue;
                 const auto& path = paths[p];
                 const auto& axis = axes[p];
-                const Vec<D> share = (volume / (D + 1)) * dyc[p];
-                for (int m = 0; m <= D; ++m)
-                    G.col(slots[path[m]]) += share;
+                // Without a band term dy = 0, and adding +0 changes no slot: a slot starts at
+                // +0 and sums of values that are not -0 are never -0.
+                if (banded[p]) {
+                    const Vec<D> share = (volume / (D + 1)) * dyc[p];
+                    for (int m = 0; m <= D; ++m)
+                        G.col(slots[path[m]]) += share;
+                }
                 for (int m = 1; m <= D; ++m) {
                     Vec<D> c;
                     for (int i = 0; i < D; ++i)
