@@ -120,13 +120,28 @@ for name in deformation.vdb inverse.vdb jacobian.vdb deformed.vdb deformed.obj r
     mkdir -p "$out"
     "$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$out" --levels 3..5 --threads 2 --quiet >/dev/null 2>&1 &
     pid=$!
-    while kill -0 "$pid" 2>/dev/null && ! compgen -G "$out/.$name.tmp*" >/dev/null; do nap; done
+    # Stop polling when the output is already complete (the match may end between two polls;
+    # then the temporary file never appears) or after 120 s: a match of a few seconds that
+    # neither ends nor writes is a failure, not a hang of the suite (once, a run of this test
+    # stopped at its 600 s timeout in this loop, for report.json; not reproduced since).
+    deadline=$((SECONDS + 120))
+    while kill -0 "$pid" 2>/dev/null && ! compgen -G "$out/.$name.tmp*" >/dev/null &&
+        [ ! -e "$out/$name" ] && [ "$SECONDS" -lt "$deadline" ]; do nap; done
+    timedOut=0
+    if [ "$SECONDS" -ge "$deadline" ]; then
+        timedOut=1
+        # For the diagnosis: the process's state (Z: exited, not yet reaped) and its threads'.
+        grep -h '^State' "/proc/$pid/status" "/proc/$pid"/task/*/status 2>/dev/null | sort | uniq -c
+        ls -a "$out"
+    fi
     kill -KILL "$pid" 2>/dev/null && kills=$((kills + 1))
     wait "$pid" 2>/dev/null
     # The temporary file still there: the kill landed while it was being written.
     compgen -G "$out/.$name.tmp*" >/dev/null && midwrite=$((midwrite + 1))
     count=$((count + 1))
-    if files=$(check_outputs_complete "$out" 2>"$SCRATCH/py.err"); then
+    if [ "$timedOut" -eq 1 ]; then
+        fail "sigkill-writing-$name: the match neither ended nor began writing it within 120 s"
+    elif files=$(check_outputs_complete "$out" 2>"$SCRATCH/py.err"); then
         echo "ok   sigkill-writing-$name: $files"
     else
         fail "sigkill-writing-$name: an output under its name is partial"
