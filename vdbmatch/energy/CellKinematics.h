@@ -135,8 +135,8 @@ CellKinematics<D>::symmetricVolume(Real c)
         const Real tB = invJ - 2.0;
         const Real rB = std::sqrt(1.0 + tB * tB);
         const Real eB = math::frobeniusPowerDp1<D>(sB) / (D + 1) + wc * rB - off;
+        volumeInverse[p] = c * eB * J[p];
         if constexpr (Grad) {
-            volumeInverse[p] = c * eB * J[p];
             const Real powA = math::frobeniusPowerDm1<D>(s);
             const Real kA = wc * t / r;
             const Real powB = math::frobeniusPowerDm1<D>(sB);
@@ -151,8 +151,6 @@ CellKinematics<D>::symmetricVolume(Real c)
                     dA[i][j][p] = (0.0 + c * gA) + ceB * C[i][j][p];
                     dB[i][j][p] = 0.0 + cJ * gB;
                 }
-        } else {
-            volumeInverse[p] = c * eB * J[p];
         }
     }
 }
