@@ -3,6 +3,7 @@
 
 #include <vdbmatch/CpuClones.h>
 #include <vdbmatch/energy/BendingTerm.h>
+#include <vdbmatch/energy/CellBandTerms.h>
 #include <vdbmatch/energy/CellKinematics.h>
 #include <vdbmatch/energy/MatchTerm.h>
 #include <vdbmatch/energy/MembraneTerm.h>
@@ -90,6 +91,43 @@ unpackSym(const Eigen::Matrix<Real, D*(D + 1) / 2, 1>& in, Mat<D>& M)
     for (int i = 0; i < D; ++i)
         for (int j = i; j < D; ++j)
             M(i, j) = M(j, i) = in[k++];
+}
+
+/// Lane @a q of the band terms: simplex @a p of the cell (its kinematics and the volume term's
+/// gradient), the frame of shape 1 at its centroid, the raw fields of shape 2 at its deformed
+/// centroid, and the band weights (eta1 only in the band of M1, as the cache says).
+template <int D, bool Grad>
+void
+fillBandLane(energy::CellBandTerms<D>& bt, int q, const energy::CellKinematics<D>& ck, int p,
+             const kinematics::SurfaceFrame<D>& f1, const RawFields<D>& raw2,
+             const RawFieldDerivatives<D>& deriv2, bool inBand1, const BandWeight& band)
+{
+    for (int i = 0; i < D; ++i) {
+        bt.n1[i][q] = f1.n[i];
+        bt.rawN2[i][q] = raw2.n[i];
+        if constexpr (Grad) bt.dd2[i][q] = deriv2.dd[i];
+        for (int j = 0; j < D; ++j) {
+            bt.A[i][j][q] = ck.A[i][j][p];
+            bt.C[i][j][q] = ck.C[i][j][p];
+            bt.B[i][j][q] = ck.B[i][j][p];
+            bt.dA[i][j][q] = ck.dA[i][j][p];
+            bt.dB[i][j][q] = ck.dB[i][j][p];
+            bt.P1[i][j][q] = f1.P(i, j);
+            bt.Tp1[i][j][q] = f1.Tp(i, j);
+            bt.Tm1[i][j][q] = f1.Tm(i, j);
+            bt.R2[i][j][q] = raw2.R(i, j);
+            if constexpr (Grad) {
+                bt.dn2[i][j][q] = deriv2.dn(i, j);
+                for (int k = 0; k < D; ++k)
+                    bt.dR2[k][i][j][q] = deriv2.dR[k](i, j);
+            }
+        }
+    }
+    bt.J[q] = ck.J[p];
+    bt.d1[q] = f1.d;
+    bt.d2[q] = raw2.d;
+    bt.eta1[q] = inBand1 ? band(f1.d) : 0;
+    bt.eta2[q] = band(raw2.d, bt.eta2D[q]);
 }
 
 } // namespace
@@ -291,6 +329,8 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
     std::array<Vec<D>, NS> yc;
     std::array<Vec<D>, NS> dyc;
     std::array<bool, NS> banded{};
+    CellBandTerms<D> bt;
+    std::array<int, NS> lane; // the cell's simplex of each lane of bt
     // Centroid of simplex p of a cell: origin + side * centroidOffset[p] (the same as centroid()).
     std::array<Vec<D>, NS> centroidOffset;
     for (std::size_t p = 0; p < paths.size(); ++p) {
@@ -340,59 +380,102 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
         else if constexpr (Grad)
             ck.zeroGradient();
 
-        for (int p = 0; p < NS; ++p) {
-            if (!(ck.J[p] > 0)) {
-                ++t.invertedSimplices;
-                continue;
-            }
-            if (symmetric) {
+        if (symmetric) {
+            // The band simplices of the cell fill the lanes of `bt` (their fields sampled one
+            // by one); the band terms are then computed lane by lane (CellBandTerms.h).
+            bt.count = 0;
+            for (int p = 0; p < NS; ++p) {
+                banded[p] = false;
+                if (!(ck.J[p] > 0)) {
+                    ++t.invertedSimplices;
+                    continue;
+                }
                 t.vol[0] += volume * ck.volumeDirect[p];
                 t.vol[1] += volume * ck.volumeInverse[p];
+                const std::size_t simplex = ci * NS + p;
+                const Vec<D>& y = yc[p];
+                // Band membership: eta1 from the cache (fixed), eta2 from d2(y). Shape 2 is
+                // sampled in full, with derivatives, only where a band term is active.
+                const bool inBand1 = mSourceIndex[simplex] >= 0;
+                bool inBand2 = false;
+                if (mayReachBand2 && !inBand1)
+                    inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
+                if (!(inBand1 || inBand2)) continue;
+                banded[p] = true;
+                ++t.bandSimplices;
+                if (cell.log2Size > 0) ++t.coarseBandSimplices;
+                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
+                    throwOutside("shape 2", y.data(), D);
+                sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
+                const int q = bt.count++;
+                lane[q] = p;
+                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, band);
             }
-            const std::size_t simplex = ci * NS + p;
-            const Vec<D>& y = yc[p];
-            // Band membership: eta1 from the cache (fixed), eta2 from d2(y). Shape 2 is sampled
-            // in full, with derivatives, only where a band term is active.
-            const bool inBand1 = mSourceIndex[simplex] >= 0;
-            bool inBand2 = false;
-            if (mayReachBand2 && !inBand1)
-                inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
-            Vec<D> dy = Vec<D>::Zero();
-            if (!symmetric || inBand1 || inBand2) {
+            bt.frame();
+            bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend);
+            if constexpr (Grad) bt.adjoint();
+            for (int q = 0; q < bt.count; ++q) {
+                if (bt.eta1[q] > 0) {
+                    t.match[0] += volume * bt.matchDirect[q];
+                    t.mem[0] += volume * bt.memDirect[q];
+                    t.bend[0] += volume * bt.bendDirect[q];
+                }
+                if (bt.eta2[q] > 0) {
+                    t.match[1] += volume * bt.matchInverse[q];
+                    t.mem[1] += volume * bt.memInverse[q];
+                    t.bend[1] += volume * bt.bendInverse[q];
+                }
+                if constexpr (Grad) {
+                    const int p = lane[q];
+                    for (int i = 0; i < D; ++i) {
+                        dyc[p][i] = bt.dy[i][q];
+                        for (int j = 0; j < D; ++j) {
+                            ck.dA[i][j][p] = bt.dA[i][j][q];
+                            ck.dB[i][j][p] = bt.dB[i][j][q];
+                        }
+                    }
+                }
+            }
+        } else {
+            // The directional energy: its volume term (eq:EcomparisonVol) and the direct
+            // halves, simplex by simplex.
+            for (int p = 0; p < NS; ++p) {
+                banded[p] = false;
+                if (!(ck.J[p] > 0)) {
+                    ++t.invertedSimplices;
+                    continue;
+                }
+                const std::size_t simplex = ci * NS + p;
+                const Vec<D>& y = yc[p];
+                const bool inBand1 = mSourceIndex[simplex] >= 0;
                 const SimplexKinematics<D> k = ck.simplex(p);
                 DensityGradient<D> dg;
                 DensityGradient<D>* dgp = Grad ? &dg : nullptr;
                 if constexpr (Grad) ck.loadGradient(p, dg);
-                if (!symmetric)
-                    t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
-                if (inBand1 || inBand2) {
+                t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
+                Vec<D> dy = Vec<D>::Zero();
+                if (inBand1) {
                     ++t.bandSimplices;
                     if (cell.log2Size > 0) ++t.coarseBandSimplices;
                     if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
                         throwOutside("shape 2", y.data(), D);
                     kinematics::makeFrame(raw2, g.f2);
                     sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
-                    g.eta1 = inBand1 ? band(g.f1.d) : 0;
+                    g.eta1 = band(g.f1.d);
                     g.eta2 = 0;
                     g.eta2Derivative = 0;
-                    if (symmetric) g.eta2 = band(g.f2.d, g.eta2Derivative);
                     if (g.eta1 > 0) {
                         t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
                         t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);
                         t.bend[0] += volume * bendingDirect<D, Grad>(k, g, mParams.cBend, dgp);
                     }
-                    if (g.eta2 > 0) {
-                        t.match[1] += volume * matchInverse<D, Grad>(k, g, mMatchWeight, dgp);
-                        t.mem[1] += volume * membraneInverse<D, Grad>(k, g, mParams.cMem, dgp);
-                        t.bend[1] += volume * bendingInverse<D, Grad>(k, g, mParams.cBend, dgp);
-                    }
                     if constexpr (Grad) dy = kinematics::frameAdjoint(raw2, deriv2, g.f2, dg.f2);
                 }
-                if constexpr (Grad) ck.storeGradient(p, dg);
-            }
-            if constexpr (Grad) {
-                dyc[p] = dy;
-                banded[p] = inBand1 || inBand2;
+                if constexpr (Grad) {
+                    ck.storeGradient(p, dg);
+                    dyc[p] = dy;
+                    banded[p] = inBand1;
+                }
             }
         }
         if constexpr (Grad) {
