@@ -11,10 +11,9 @@
 /// lanes with a straight-line body, which the compiler vectorises across the simplices (as in
 /// CellKinematics.h). The loops over matrix entries inside are fully unrolled (`#pragma GCC
 /// unroll`: GCC does not unroll loops with bodies this large by itself, and a loop left inside
-/// keeps the one around it from being vectorised); the file that includes this is compiled with
-/// -fno-trapping-math (CMakeLists.txt), without which the selects below stay branches. A half whose
-/// band weight is zero is computed and then not used: its accumulations are selected away, so the
-/// lanes add exactly what the per-simplex code adds.
+/// keeps the one around it from being vectorised). Both halves are computed in every lane, also
+/// where a band weight is zero; their contributions are then exact zeros (lanes::add), and the
+/// caller adds only the densities of the halves that are on.
 ///
 /// **The same bits as the per-simplex code.** Each lane performs the operations of
 /// kinematics::makeFrame, matchDirect/membraneDirect/bendingDirect, matchInverse/
@@ -286,35 +285,36 @@ store(const V<D>& r, Real (&v)[D][N], int q)
         v[i][q] = r.a[i];
 }
 
-/// a += x where @a active, else a unchanged (the per-simplex code skips the half), written as
-/// a + (active ? x : +0) so that no floating-point operation is conditional (with
-/// -ftrapping-math the compiler would not if-convert one, and the loop would not be
-/// vectorised). The same bits: every accumulator here starts as +0 or as a sum 0.0 + ... and
-/// only has values added, so it is never -0, and a + (+0) = a for every a other than -0.
+/// a += x. The lanes add both halves' contributions whatever the band weights: a half whose
+/// weight is 0 contributes exact zeros (every derivative it adds has the factor eta = 0, or
+/// eta' = 0, which vanishes with eta at the edge of the band, times finite values), and adding
+/// a zero leaves an accumulator unchanged bit for bit because none is ever -0 (each starts as
+/// +0 or as a sum 0.0 + ..., and a sum is -0 only if both terms are). So the lanes add what the
+/// per-simplex code, which skips the half, adds; no branch or select in the loop.
 inline void
-addIf(bool active, Real& a, Real x)
+add(Real& a, Real x)
 {
-    a = a + (active ? x : 0.0);
+    a = a + x;
 }
 
 template <int D>
 inline void
-addIf(bool active, M<D>& m, const M<D>& x)
+add(M<D>& m, const M<D>& x)
 {
 #pragma GCC unroll 3
     for (int i = 0; i < D; ++i)
 #pragma GCC unroll 3
         for (int j = 0; j < D; ++j)
-            addIf(active, m.a[i][j], x.a[i][j]);
+            add(m.a[i][j], x.a[i][j]);
 }
 
 template <int D>
 inline void
-addIf(bool active, V<D>& v, const V<D>& x)
+add(V<D>& v, const V<D>& x)
 {
 #pragma GCC unroll 3
     for (int i = 0; i < D; ++i)
-        addIf(active, v.a[i], x.a[i]);
+        add(v.a[i], x.a[i]);
 }
 
 } // namespace lanes
@@ -402,7 +402,6 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
     const Real off = Constants::offset();
     // Direct halves (weight eta1): matchDirect, membraneDirect, bendingDirect.
     for (int q = 0; q < count; ++q) {
-        const bool on = eta1[q] > 0;
         const V<D> vn1 = load<D, N>(n1, q), vn2 = load<D, N>(n2, q);
         const M<D> a = load<D, N>(A, q);
         const Real r = d2[q] - d1[q];
@@ -415,7 +414,7 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
         M<D> gP{}, gTp{};
         if constexpr (Grad) {
             Real gd = 0;
-            addIf(on, gd, 2.0 * cMatch * eta1[q] * r);
+            add(gd, 2.0 * cMatch * eta1[q] * r);
             ad[q] = gd;
         }
         // projectedDirect(L2, R1) = W(L2 A R1 + n2 (x) n1) for (P2, P1) and (Tp2, Tm1).
@@ -441,9 +440,9 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
                     for (int j = 0; j < D; ++j)
                         G.a[i][j] = G.a[i][j] * w;
                 const M<D> LG = product<D, LLL>(transposed(L2), plain(G));
-                addIf(on, gA, product<D, RRR>(plain(LG), transposed(R1)));
-                addIf(on, gn, apply<D, LLR>(plain(G), vn1));
-                addIf(on, gL2, product<D, LLR>(plain(G), transposed(AR1)));
+                add(gA, product<D, RRR>(plain(LG), transposed(R1)));
+                add(gn, apply<D, LLR>(plain(G), vn1));
+                add(gL2, product<D, LLR>(plain(G), transposed(AR1)));
             }
         };
         projected(P2, P1, cMem, memDirect, gP);
@@ -457,7 +456,6 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
     }
     // Inverse halves (weight eta2): matchInverse, membraneInverse, bendingInverse.
     for (int q = 0; q < count; ++q) {
-        const bool on = eta2[q] > 0;
         const V<D> vn1 = load<D, N>(n1, q), vn2 = load<D, N>(n2, q);
         const M<D> b = load<D, N>(B, q), cofA = load<D, N>(C, q);
         const Real j = J[q];
@@ -474,7 +472,7 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
             gTm = {};
             gn = load<D, N>(an, q);
             gd = ad[q];
-            addIf(on, gd, cMatch * j * (eta2D[q] * r2 + 2.0 * eta2[q] * r));
+            add(gd, cMatch * j * (eta2D[q] * r2 + 2.0 * eta2[q] * r));
             const Real k = cMatch * eta2[q] * r2;
             M<D> x;
 #pragma GCC unroll 3
@@ -482,7 +480,7 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
 #pragma GCC unroll 3
                 for (int l = 0; l < D; ++l)
                     x.a[i][l] = k * cofA.a[i][l];
-            addIf(on, gA, x);
+            add(gA, x);
         }
         // projectedInverse(L1, R2) = W(L1 B R2 + n1 (x) n2) J for (P1, P2) and (Tp1, Tm2).
         auto projected = [&](const MatLanes& L1l, const MatLanes& R2l, Real c, Lanes& density,
@@ -507,9 +505,9 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
                     for (int l = 0; l < D; ++l)
                         G.a[i][l] = G.a[i][l] * s;
                 const M<D> LG = product<D, LLL>(transposed(L1), plain(G));
-                addIf(on, gB, product<D, RRR>(plain(LG), transposed(R2m)));
-                addIf(on, gn, apply<D, LLL>(transposed(G), vn1));
-                addIf(on, gd, c * eta2D[q] * j * e);
+                add(gB, product<D, RRR>(plain(LG), transposed(R2m)));
+                add(gn, apply<D, LLL>(transposed(G), vn1));
+                add(gd, c * eta2D[q] * j * e);
                 const Real k = c * eta2[q] * e;
                 M<D> x;
 #pragma GCC unroll 3
@@ -517,8 +515,8 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
 #pragma GCC unroll 3
                     for (int l = 0; l < D; ++l)
                         x.a[i][l] = k * cofA.a[i][l];
-                addIf(on, gA, x);
-                addIf(on, gR2, product<D, LLL>(transposed(L1B), plain(G)));
+                add(gA, x);
+                add(gR2, product<D, LLL>(transposed(L1B), plain(G)));
             }
         };
         projected(P1, P2, cMem, memInverse, gP);
