@@ -2,7 +2,8 @@
 /// @brief The band terms of the symmetric energy (eq:EsymMatch, eq:EsymMem, eq:EsymBend) for the
 ///        band simplices of one lattice cell at once, lane by lane: the frame of shape 2 at the
 ///        deformed centroid, the direct and inverse densities with their derivatives, and the
-///        reverse mode through the frame to dE/dy.
+///        reverse mode through the frame to dE/dy. The directional energy (eq:Ecomparison) uses
+///        the direct halves alone.
 ///
 /// A simplex in the band of M1 or of M2 costs about five times one that carries only the volume
 /// term, and at the fine levels a quarter of the simplices are in a band. The caller samples the
@@ -233,8 +234,10 @@ template <int D> struct CellBandTerms
     /// The frame of shape 2 from its raw fields (kinematics::makeFrame).
     void frame();
     /// The six densities with weights c_match sigma^-q, c_mem, c_bend; with Grad, their
-    /// derivatives added to dA, dB and the frame adjoint.
-    template <bool Grad> void terms(Real cMatch, Real cMem, Real cBend);
+    /// derivatives added to dA, dB and the frame adjoint. Without @a inverseHalves only the
+    /// direct halves (the directional energy eq:Ecomparison, whose eta2 is 0): the inverse
+    /// densities are not set and dB is not touched.
+    template <bool Grad> void terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves = true);
     /// dy = dE/dy through the frame and the field interpolants (kinematics::frameAdjoint).
     void adjoint();
 };
@@ -394,7 +397,7 @@ CellBandTerms<D>::frame()
 template <int D>
 template <bool Grad>
 inline void
-CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
+CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
 {
     using namespace lanes;
     using Constants = math::WboundedConstants<D>;
@@ -453,6 +456,16 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend)
             store<D, N>(gP, aP, q);
             store<D, N>(gTp, aTp, q);
         }
+    }
+    if (!inverseHalves) {
+        if constexpr (Grad)
+            for (int q = 0; q < count; ++q)
+#pragma GCC unroll 3
+                for (int i = 0; i < D; ++i)
+#pragma GCC unroll 3
+                    for (int j = 0; j < D; ++j)
+                        aTm[i][j][q] = 0;
+        return;
     }
     // Inverse halves (weight eta2): matchInverse, membraneInverse, bendingInverse.
     for (int q = 0; q < count; ++q) {

@@ -2,11 +2,8 @@
 #include "Energy.h"
 
 #include <vdbmatch/CpuClones.h>
-#include <vdbmatch/energy/BendingTerm.h>
 #include <vdbmatch/energy/CellBandTerms.h>
 #include <vdbmatch/energy/CellKinematics.h>
-#include <vdbmatch/energy/MatchTerm.h>
-#include <vdbmatch/energy/MembraneTerm.h>
 #include <vdbmatch/energy/VolumeTerm.h>
 #include <vdbmatch/geometry/BandWeight.h>
 
@@ -95,12 +92,14 @@ unpackSym(const Eigen::Matrix<Real, D*(D + 1) / 2, 1>& in, Mat<D>& M)
 
 /// Lane @a q of the band terms: simplex @a p of the cell (its kinematics and the volume term's
 /// gradient), the frame of shape 1 at its centroid, the raw fields of shape 2 at its deformed
-/// centroid, and the band weights (eta1 only in the band of M1, as the cache says).
+/// centroid, and the band weights (eta1 only in the band of M1, as the cache says; eta2 only for
+/// the symmetric energy).
 template <int D, bool Grad>
 void
 fillBandLane(energy::CellBandTerms<D>& bt, int q, const energy::CellKinematics<D>& ck, int p,
              const kinematics::SurfaceFrame<D>& f1, const RawFields<D>& raw2,
-             const RawFieldDerivatives<D>& deriv2, bool inBand1, const BandWeight& band)
+             const RawFieldDerivatives<D>& deriv2, bool inBand1, bool symmetric,
+             const BandWeight& band)
 {
     for (int i = 0; i < D; ++i) {
         bt.n1[i][q] = f1.n[i];
@@ -127,7 +126,23 @@ fillBandLane(energy::CellBandTerms<D>& bt, int q, const energy::CellKinematics<D
     bt.d1[q] = f1.d;
     bt.d2[q] = raw2.d;
     bt.eta1[q] = inBand1 ? band(f1.d) : 0;
-    bt.eta2[q] = band(raw2.d, bt.eta2D[q]);
+    bt.eta2D[q] = 0;
+    bt.eta2[q] = symmetric ? band(raw2.d, bt.eta2D[q]) : 0;
+}
+
+/// Lane @a q's results back to simplex @a p of the cell: dE/dA, dE/dB and dE/dy.
+template <int D>
+void
+storeBandLane(const energy::CellBandTerms<D>& bt, int q, int p, energy::CellKinematics<D>& ck,
+              std::array<Vec<D>, energy::CellKinematics<D>::N>& dyc)
+{
+    for (int i = 0; i < D; ++i) {
+        dyc[p][i] = bt.dy[i][q];
+        for (int j = 0; j < D; ++j) {
+            ck.dA[i][j][p] = bt.dA[i][j][q];
+            ck.dB[i][j][p] = bt.dB[i][j][q];
+        }
+    }
 }
 
 } // namespace
@@ -409,7 +424,7 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
                 sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
                 const int q = bt.count++;
                 lane[q] = p;
-                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, band);
+                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, true, band);
             }
             bt.frame();
             bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend);
@@ -425,57 +440,47 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
                     t.mem[1] += volume * bt.memInverse[q];
                     t.bend[1] += volume * bt.bendInverse[q];
                 }
-                if constexpr (Grad) {
-                    const int p = lane[q];
-                    for (int i = 0; i < D; ++i) {
-                        dyc[p][i] = bt.dy[i][q];
-                        for (int j = 0; j < D; ++j) {
-                            ck.dA[i][j][p] = bt.dA[i][j][q];
-                            ck.dB[i][j][p] = bt.dB[i][j][q];
-                        }
-                    }
-                }
+                if constexpr (Grad) storeBandLane<D>(bt, q, lane[q], ck, dyc);
             }
         } else {
-            // The directional energy: its volume term (eq:EcomparisonVol) and the direct
-            // halves, simplex by simplex.
+            // The directional energy: its volume term (eq:EcomparisonVol) simplex by simplex,
+            // then the direct halves of the band terms lane by lane.
+            bt.count = 0;
             for (int p = 0; p < NS; ++p) {
                 banded[p] = false;
                 if (!(ck.J[p] > 0)) {
                     ++t.invertedSimplices;
                     continue;
                 }
-                const std::size_t simplex = ci * NS + p;
-                const Vec<D>& y = yc[p];
-                const bool inBand1 = mSourceIndex[simplex] >= 0;
                 const SimplexKinematics<D> k = ck.simplex(p);
                 DensityGradient<D> dg;
                 DensityGradient<D>* dgp = Grad ? &dg : nullptr;
                 if constexpr (Grad) ck.loadGradient(p, dg);
                 t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
-                Vec<D> dy = Vec<D>::Zero();
-                if (inBand1) {
-                    ++t.bandSimplices;
-                    if (cell.log2Size > 0) ++t.coarseBandSimplices;
-                    if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
-                        throwOutside("shape 2", y.data(), D);
-                    kinematics::makeFrame(raw2, g.f2);
-                    sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
-                    g.eta1 = band(g.f1.d);
-                    g.eta2 = 0;
-                    g.eta2Derivative = 0;
-                    if (g.eta1 > 0) {
-                        t.match[0] += volume * matchDirect<D, Grad>(g, mMatchWeight, dgp);
-                        t.mem[0] += volume * membraneDirect<D, Grad>(k, g, mParams.cMem, dgp);
-                        t.bend[0] += volume * bendingDirect<D, Grad>(k, g, mParams.cBend, dgp);
-                    }
-                    if constexpr (Grad) dy = kinematics::frameAdjoint(raw2, deriv2, g.f2, dg.f2);
+                if constexpr (Grad) ck.storeGradient(p, dg);
+                const std::size_t simplex = ci * NS + p;
+                if (mSourceIndex[simplex] < 0) continue;
+                banded[p] = true;
+                ++t.bandSimplices;
+                if (cell.log2Size > 0) ++t.coarseBandSimplices;
+                const Vec<D>& y = yc[p];
+                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
+                    throwOutside("shape 2", y.data(), D);
+                sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
+                const int q = bt.count++;
+                lane[q] = p;
+                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, true, false, band);
+            }
+            bt.frame();
+            bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, false);
+            if constexpr (Grad) bt.adjoint();
+            for (int q = 0; q < bt.count; ++q) {
+                if (bt.eta1[q] > 0) {
+                    t.match[0] += volume * bt.matchDirect[q];
+                    t.mem[0] += volume * bt.memDirect[q];
+                    t.bend[0] += volume * bt.bendDirect[q];
                 }
-                if constexpr (Grad) {
-                    ck.storeGradient(p, dg);
-                    dyc[p] = dy;
-                    banded[p] = inBand1;
-                }
+                if constexpr (Grad) storeBandLane<D>(bt, q, lane[q], ck, dyc);
             }
         }
         if constexpr (Grad) {
