@@ -130,21 +130,6 @@ fillBandLane(energy::CellBandTerms<D>& bt, int q, const energy::CellKinematics<D
     bt.eta2[q] = symmetric ? band(raw2.d, bt.eta2D[q]) : 0;
 }
 
-/// Lane @a q's results back to simplex @a p of the cell: dE/dA, dE/dB and dE/dy.
-template <int D>
-void
-storeBandLane(const energy::CellBandTerms<D>& bt, int q, int p, energy::CellKinematics<D>& ck,
-              std::array<Vec<D>, energy::CellKinematics<D>::N>& dyc)
-{
-    for (int i = 0; i < D; ++i) {
-        dyc[p][i] = bt.dy[i][q];
-        for (int j = 0; j < D; ++j) {
-            ck.dA[i][j][p] = bt.dA[i][j][q];
-            ck.dB[i][j][p] = bt.dB[i][j][q];
-        }
-    }
-}
-
 } // namespace
 
 template <int D>
@@ -395,92 +380,71 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
         else if constexpr (Grad)
             ck.zeroGradient();
 
-        if (symmetric) {
-            // The band simplices of the cell fill the lanes of `bt` (their fields sampled one
-            // by one); the band terms are then computed lane by lane (CellBandTerms.h).
-            bt.count = 0;
-            for (int p = 0; p < NS; ++p) {
-                banded[p] = false;
-                if (!(ck.J[p] > 0)) {
-                    ++t.invertedSimplices;
-                    continue;
-                }
+        // The band simplices of the cell fill the lanes of `bt` (their fields sampled one by
+        // one); the band terms are then computed lane by lane (CellBandTerms.h).
+        bt.count = 0;
+        for (int p = 0; p < NS; ++p) {
+            banded[p] = false;
+            if (!(ck.J[p] > 0)) {
+                ++t.invertedSimplices;
+                continue;
+            }
+            if (symmetric) {
                 t.vol[0] += volume * ck.volumeDirect[p];
                 t.vol[1] += volume * ck.volumeInverse[p];
-                const std::size_t simplex = ci * NS + p;
-                const Vec<D>& y = yc[p];
-                // Band membership: eta1 from the cache (fixed), eta2 from d2(y). Shape 2 is
-                // sampled in full, with derivatives, only where a band term is active.
-                const bool inBand1 = mSourceIndex[simplex] >= 0;
-                bool inBand2 = false;
-                if (mayReachBand2 && !inBand1)
-                    inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
-                if (!(inBand1 || inBand2)) continue;
-                banded[p] = true;
-                ++t.bandSimplices;
-                if (cell.log2Size > 0) ++t.coarseBandSimplices;
-                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
-                    throwOutside("shape 2", y.data(), D);
-                sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
-                const int q = bt.count++;
-                lane[q] = p;
-                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, true, band);
-            }
-            bt.frame();
-            bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend);
-            if constexpr (Grad) bt.adjoint();
-            for (int q = 0; q < bt.count; ++q) {
-                if (bt.eta1[q] > 0) {
-                    t.match[0] += volume * bt.matchDirect[q];
-                    t.mem[0] += volume * bt.memDirect[q];
-                    t.bend[0] += volume * bt.bendDirect[q];
-                }
-                if (bt.eta2[q] > 0) {
-                    t.match[1] += volume * bt.matchInverse[q];
-                    t.mem[1] += volume * bt.memInverse[q];
-                    t.bend[1] += volume * bt.bendInverse[q];
-                }
-                if constexpr (Grad) storeBandLane<D>(bt, q, lane[q], ck, dyc);
-            }
-        } else {
-            // The directional energy: its volume term (eq:EcomparisonVol) simplex by simplex,
-            // then the direct halves of the band terms lane by lane.
-            bt.count = 0;
-            for (int p = 0; p < NS; ++p) {
-                banded[p] = false;
-                if (!(ck.J[p] > 0)) {
-                    ++t.invertedSimplices;
-                    continue;
-                }
+            } else {
+                // The directional energy's volume term (eq:EcomparisonVol), simplex by simplex.
                 const SimplexKinematics<D> k = ck.simplex(p);
                 DensityGradient<D> dg;
                 DensityGradient<D>* dgp = Grad ? &dg : nullptr;
                 if constexpr (Grad) ck.loadGradient(p, dg);
                 t.vol[0] += volume * volumeComparison<D, Grad>(k, mVolumeWeight, dgp);
                 if constexpr (Grad) ck.storeGradient(p, dg);
-                const std::size_t simplex = ci * NS + p;
-                if (mSourceIndex[simplex] < 0) continue;
-                banded[p] = true;
-                ++t.bandSimplices;
-                if (cell.log2Size > 0) ++t.coarseBandSimplices;
-                const Vec<D>& y = yc[p];
-                if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
-                    throwOutside("shape 2", y.data(), D);
-                sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
-                const int q = bt.count++;
-                lane[q] = p;
-                fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, true, false, band);
             }
-            bt.frame();
-            bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, false);
-            if constexpr (Grad) bt.adjoint();
-            for (int q = 0; q < bt.count; ++q) {
-                if (bt.eta1[q] > 0) {
-                    t.match[0] += volume * bt.matchDirect[q];
-                    t.mem[0] += volume * bt.memDirect[q];
-                    t.bend[0] += volume * bt.bendDirect[q];
+            const std::size_t simplex = ci * NS + p;
+            const Vec<D>& y = yc[p];
+            // Band membership: eta1 from the cache (fixed), eta2 from d2(y) (the symmetric
+            // energy only). Shape 2 is sampled in full, with derivatives, only where a band term
+            // is active.
+            const bool inBand1 = mSourceIndex[simplex] >= 0;
+            bool inBand2 = false;
+            if (mayReachBand2 && !inBand1)
+                inBand2 = inInverseBand(y, inverseBand ? inverseBand + simplex : nullptr);
+            if (!(inBand1 || inBand2)) continue;
+            banded[p] = true;
+            ++t.bandSimplices;
+            if (cell.log2Size > 0) ++t.coarseBandSimplices;
+            if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
+                throwOutside("shape 2", y.data(), D);
+            sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
+            const int q = bt.count++;
+            lane[q] = p;
+            fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, symmetric, band);
+        }
+        bt.frame();
+        bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, symmetric);
+        if constexpr (Grad) bt.adjoint();
+        for (int q = 0; q < bt.count; ++q) {
+            if (bt.eta1[q] > 0) {
+                t.match[0] += volume * bt.matchDirect[q];
+                t.mem[0] += volume * bt.memDirect[q];
+                t.bend[0] += volume * bt.bendDirect[q];
+            }
+            if (bt.eta2[q] > 0) {
+                t.match[1] += volume * bt.matchInverse[q];
+                t.mem[1] += volume * bt.memInverse[q];
+                t.bend[1] += volume * bt.bendInverse[q];
+            }
+            if constexpr (Grad) {
+                // Lane q's results back to its simplex: dE/dA, dE/dB, dE/dy.
+                const int p = lane[q];
+                for (int i = 0; i < D; ++i) {
+                    dyc[p][i] = bt.dy[i][q];
+                    for (int j = 0; j < D; ++j) {
+                        ck.dA[i][j][p] = bt.dA[i][j][q];
+                        ck.dB[i][j][p] = bt.dB[i][j][q];
+                    }
                 }
-                if constexpr (Grad) storeBandLane<D>(bt, q, lane[q], ck, dyc);
             }
         }
         if constexpr (Grad) {
