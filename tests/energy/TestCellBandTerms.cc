@@ -6,6 +6,7 @@
 ///        kinematics::frameAdjoint. Each lane must repeat Eigen's evaluation order; a reordered
 ///        sum fails here on most inputs.
 #include "support/RandomMatrices.h"
+#include "support/SameBits.h"
 
 #include <vdbmatch/energy/BendingTerm.h>
 #include <vdbmatch/energy/CellBandTerms.h>
@@ -15,18 +16,12 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <cstring>
 
 using namespace vdbmatch;
 using namespace vdbmatch::energy;
+using vdbmatch::test::sameBits;
 
 namespace {
-
-bool
-sameBits(Real a, Real b)
-{
-    return std::memcmp(&a, &b, sizeof(Real)) == 0;
-}
 
 template <int D>
 void

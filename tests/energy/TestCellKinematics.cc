@@ -5,6 +5,7 @@
 ///        The energy's results are bitwise independent of this choice only if every lane
 ///        repeats Eigen's evaluation order; a reordered sum fails here on most inputs.
 #include "support/RandomMatrices.h"
+#include "support/SameBits.h"
 
 #include <vdbmatch/energy/CellKinematics.h>
 #include <vdbmatch/energy/VolumeTerm.h>
@@ -12,19 +13,12 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <cstring>
 
 using namespace vdbmatch;
 using namespace vdbmatch::energy;
+using vdbmatch::test::sameBits;
 
 namespace {
-
-/// The same double, bit for bit (also -0 against 0).
-bool
-sameBits(Real a, Real b)
-{
-    return std::memcmp(&a, &b, sizeof(Real)) == 0;
-}
 
 template <int D>
 void
