@@ -203,9 +203,10 @@ template <int D> struct CellBandTerms
     int count = 0; ///< lanes in use, 0..N
 
     // Inputs, set by the caller for lanes 0..count-1.
-    MatLanes A, C, B;        ///< D phi, cof A, A^{-1} (J > 0)
-    Lanes J;                 ///< det A
-    MatLanes dA, dB;         ///< the volume term's dE/dA, dE/dB; the band terms are added
+    MatLanes A, B;   ///< D phi, A^{-1} (J > 0)
+    MatLanes C;      ///< cof A (with gradients only)
+    Lanes J;         ///< det A
+    MatLanes dA, dB; ///< with gradients: the volume term's dE/dA, dE/dB, plus the band terms
     Lanes eta1, eta2, eta2D; ///< eta_sigma(d1), eta_sigma(d2(y)), eta_sigma'(d2(y))
     Lanes d1;                ///< frame of shape 1 at the centroid x
     VecLanes n1;             ///<
@@ -409,13 +410,11 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
         const M<D> a = load<D, N>(A, q);
         const Real r = d2[q] - d1[q];
         matchDirect[q] = cMatch * eta1[q] * r * r;
-        M<D> gA = load<D, N>(dA, q);
-        V<D> gn;
-#pragma GCC unroll 3
-        for (int i = 0; i < D; ++i)
-            gn.a[i] = 0;
-        M<D> gP{}, gTp{};
+        // The gradient's accumulators: dA from the volume term, the frame adjoint from zero.
+        M<D> gA, gP{}, gTp{};
+        V<D> gn{};
         if constexpr (Grad) {
+            gA = load<D, N>(dA, q);
             Real gd = 0;
             add(gd, 2.0 * cMatch * eta1[q] * r);
             ad[q] = gd;
@@ -470,15 +469,16 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
     // Inverse halves (weight eta2): matchInverse, membraneInverse, bendingInverse.
     for (int q = 0; q < count; ++q) {
         const V<D> vn1 = load<D, N>(n1, q), vn2 = load<D, N>(n2, q);
-        const M<D> b = load<D, N>(B, q), cofA = load<D, N>(C, q);
+        const M<D> b = load<D, N>(B, q);
         const Real j = J[q];
         const Real r = d2[q] - d1[q];
         const Real r2 = r * r;
         matchInverse[q] = cMatch * eta2[q] * j * r2;
-        M<D> gA, gB, gP, gTm;
+        M<D> cofA, gA, gB, gP, gTm;
         V<D> gn;
         Real gd = 0;
         if constexpr (Grad) {
+            cofA = load<D, N>(C, q);
             gA = load<D, N>(dA, q);
             gB = load<D, N>(dB, q);
             gP = load<D, N>(aP, q);

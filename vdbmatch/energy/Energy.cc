@@ -107,15 +107,16 @@ fillBandLane(energy::CellBandTerms<D>& bt, int q, const energy::CellKinematics<D
         if constexpr (Grad) bt.dd2[i][q] = deriv2.dd[i];
         for (int j = 0; j < D; ++j) {
             bt.A[i][j][q] = ck.A[i][j][p];
-            bt.C[i][j][q] = ck.C[i][j][p];
             bt.B[i][j][q] = ck.B[i][j][p];
-            bt.dA[i][j][q] = ck.dA[i][j][p];
-            bt.dB[i][j][q] = ck.dB[i][j][p];
             bt.P1[i][j][q] = f1.P(i, j);
             bt.Tp1[i][j][q] = f1.Tp(i, j);
             bt.Tm1[i][j][q] = f1.Tm(i, j);
             bt.R2[i][j][q] = raw2.R(i, j);
             if constexpr (Grad) {
+                // Only the gradient uses cof A, and only it has the volume term's dA, dB.
+                bt.C[i][j][q] = ck.C[i][j][p];
+                bt.dA[i][j][q] = ck.dA[i][j][p];
+                bt.dB[i][j][q] = ck.dB[i][j][p];
                 bt.dn2[i][j][q] = deriv2.dn(i, j);
                 for (int k = 0; k < D; ++k)
                     bt.dR2[k][i][j][q] = deriv2.dR[k](i, j);
@@ -318,7 +319,7 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
     const Real h = L.h();
 
     std::array<Vec<D>, NC> uc;
-    PointGeometry<D> g;
+    kinematics::SurfaceFrame<D> f1; // shape 1 at a band simplex's centroid
     RawFields<D> raw2;
     RawFieldDerivatives<D> deriv2;
     // The kinematics and the symmetric volume term of the cell's simplices, lane by lane (the
@@ -416,10 +417,10 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
             if (cell.log2Size > 0) ++t.coarseBandSimplices;
             if (!mShape2->sample(y, raw2, Grad ? &deriv2 : nullptr))
                 throwOutside("shape 2", y.data(), D);
-            sourceFrame(simplex, origin + side * centroidOffset[p], g.f1);
+            sourceFrame(simplex, origin + side * centroidOffset[p], f1);
             const int q = bt.count++;
             lane[q] = p;
-            fillBandLane<D, Grad>(bt, q, ck, p, g.f1, raw2, deriv2, inBand1, symmetric, band);
+            fillBandLane<D, Grad>(bt, q, ck, p, f1, raw2, deriv2, inBand1, symmetric, band);
         }
         bt.frame();
         bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, symmetric);
