@@ -1,6 +1,7 @@
 /// @file Match.cc
 #include "Match.h"
 
+#include <vdbmatch/geometry/ExtremityMatching.h>
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
@@ -146,6 +147,10 @@ MatchOptions::validate() const
                       "MatchOptions: landmarkWeight must be finite and >= 0, got "
                           << landmarkWeight);
     }
+    if (autoLandmarkLevels < 1) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: autoLandmarkLevels must be >= 1, got " << autoLandmarkLevels);
+    }
     if (coarsestLevel > multiscale.minLevel) {
         OPENVDB_THROW(openvdb::ValueError, "MatchOptions: coarsestLevel ("
                                                << coarsestLevel << ") must not exceed minLevel ("
@@ -249,6 +254,55 @@ minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
         [](Real a, Real b) { return std::min(a, b); });
 }
 
+namespace {
+
+/// MatchOptions::autoLandmarks: the paired extremities of the two shapes (Omega units in,
+/// world units out).
+template <int D>
+AutoLandmarkSummary
+autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
+              const UnitBoxPlacement& placement, const MatchOptions& opts)
+{
+    const Clock::time_point start = Clock::now();
+    AutoLandmarkSummary out;
+    out.requested = true;
+    ExtremityOptions eo;
+    eo.threaded = opts.threaded;
+    Extremities<D> a, b;
+    auto findA = [&] { a = findExtremities<D>(unitSource, eo); };
+    auto findB = [&] { b = findExtremities<D>(unitTarget, eo); };
+    if (opts.threaded) {
+        tbb::parallel_invoke(findA, findB);
+    } else {
+        findA();
+        findB();
+    }
+    out.sourceExtremities = a.size();
+    out.targetExtremities = b.size();
+    const ExtremityPairing pairing = matchExtremities<D>(a, b);
+    out.seconds = secondsSince(start);
+    if (!pairing.ok) {
+        out.reason = pairing.reason;
+        return out;
+    }
+    out.used = true;
+    out.distortion = pairing.distortion;
+    out.candidates = pairing.candidates;
+    out.lastLevel = opts.multiscale.minLevel + opts.autoLandmarkLevels - 1;
+    const auto world = [&](const Vec<D>& p) {
+        return placement.toWorld(openvdb::Vec3d(p[0], p[1], D == 3 ? p[D - 1] : 0.5));
+    };
+    for (const auto& [i, j] : pairing.pairs) {
+        openvdb::Vec3d wa = world(a.points[i]), wb = world(b.points[j]);
+        if (D == 2) wa[2] = wb[2] = 0;
+        out.source.push_back(wa);
+        out.target.push_back(wb);
+    }
+    return out;
+}
+
+} // namespace
+
 template <int D>
 MatchResult<D>
 match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement& placement,
@@ -271,6 +325,14 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
 
     MatchResult<D> result;
     result.placement = placement;
+    // The landmarks act at every level, automatic ones at the first autoLandmarkLevels only.
+    int lastLandmarkLevel = std::numeric_limits<int>::max();
+    if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
+        result.autoLandmarks = autoLandmarks(unitSource, unitTarget, placement, opts);
+        lastLandmarkLevel = result.autoLandmarks.lastLevel;
+        opts.sourceLandmarks = result.autoLandmarks.source;
+        opts.targetLandmarks = result.autoLandmarks.target;
+    }
     // Landmarks in Omega units; the source points must lie inside Omega (the target points
     // need not: the term pulls phi(a_k) towards them).
     LandmarkPairs<D> landmarks;
@@ -338,7 +400,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 buildTarget();
             }
             level.surfacePoints = &unitSource.points;
-            if (!landmarks.source.empty()) level.landmarks = &landmarks;
+            if (!landmarks.source.empty() && l <= lastLandmarkLevel) level.landmarks = &landmarks;
             summary.fieldSeconds = secondsSince(t0);
 
             t0 = Clock::now();

@@ -164,6 +164,15 @@ struct MatchOptions
     std::vector<openvdb::Vec3d> sourceLandmarks, targetLandmarks;
     /// c_lm of the landmark term, Omega units (>= 0).
     double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
+    /// Automatic landmarks, an addition to the paper (docs/numerics.md "Automatic landmarks"):
+    /// when no landmarks are given, the extremities of the two shapes (geometry/Extremities.h),
+    /// paired by their inner distances (geometry/ExtremityMatching.h), are the landmarks of the
+    /// first autoLandmarkLevels levels only: they choose which limb goes where at the coarse
+    /// levels, and the finer levels follow the shape energy alone. When the extremities cannot
+    /// be paired, the match runs without (MatchResult::autoLandmarks says why).
+    bool autoLandmarks = false;
+    /// Levels, from the first, at which the automatic landmarks act (>= 1).
+    int autoLandmarkLevels = 2;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -207,6 +216,21 @@ struct LandmarkResidual
     double meanWorld = 0, maxWorld = 0;           ///< world units, at the end
 };
 
+/// What MatchOptions::autoLandmarks found.
+struct AutoLandmarkSummary
+{
+    bool requested = false; ///< autoLandmarks was set and no landmarks were given
+    bool used = false;      ///< the extremities were paired and used as landmarks
+    std::string reason;     ///< why not, when requested && !used
+    std::size_t sourceExtremities = 0, targetExtremities = 0;
+    double distortion = 0;      ///< of the pairing (ExtremityPairing::distortion)
+    std::size_t candidates = 0; ///< pairings within the tolerance (ExtremityPairing::candidates)
+    /// The pairs, world units (2D: z = 0), row k of each.
+    std::vector<openvdb::Vec3d> source, target;
+    int lastLevel = 0; ///< the landmarks act at the levels up to this one
+    double seconds = 0;
+};
+
 /// |d2(phi(v))| over the vertices v of M1.
 struct MatchResidual
 {
@@ -226,6 +250,7 @@ template <int D> struct MatchResult
     Surface<D> deformedSource;
     MatchResidual residual;
     LandmarkResidual landmarks;
+    AutoLandmarkSummary autoLandmarks;
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 

@@ -282,6 +282,34 @@ assert "landmarks" not in plain and "landmarks" not in plain["parameters"]
 assert lm["result"]["residual"]["meanUnit"] < lm["levels"][-1]["h"] / 2
 assert again["landmarks"] == L and again["result"]["energy"] == lm["result"]["energy"], again["landmarks"]
 PY
+    # Automatic landmarks: the figures' five extremities (head, hands, feet), paired, act at
+    # the first two levels only; the reverse run pairs the same points the other way.
+    check auto-landmarks-bad 1 '' "--auto-landmarks expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks yes --quiet
+    check auto-landmark-levels-bad 3 '' 'autoLandmarkLevels must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-levels 0 --quiet
+    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on
+    check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6 --auto-landmarks on
+    check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
+    count=$((count + 1))
+    if "$PYTHON" - "$SCRATCH/m2" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
+import json, sys
+plain, auto, rev, again = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+A = auto["autoLandmarks"]
+assert A["used"] and A["reason"] is None and A["sourceExtremities"] == A["targetExtremities"] == 5, A
+assert A["lastLevel"] == 5 and auto["parameters"]["autoLandmarks"] == "on", A
+assert auto["parameters"]["autoLandmarkLevels"] == 2
+assert A["meanWorld"] < A["startMeanWorld"], A
+# The landmark term acts at levels 4 and 5, not at 6.
+terms = [l["terms"]["landmarks"] for l in auto["levels"]]
+assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
+# Off by default (reported), and a config of the run reproduces it.
+assert "autoLandmarks" not in plain and plain["parameters"]["autoLandmarks"] == "off"
+assert again["autoLandmarks"] == dict(A, seconds=again["autoLandmarks"]["seconds"])
+assert again["result"]["energy"] == auto["result"]["energy"]
+# The reverse pairs the same points, swapped.
+fwd = sorted((tuple(p["source"]), tuple(p["target"])) for p in A["pairs"])
+back = sorted((tuple(p["target"]), tuple(p["source"])) for p in rev["autoLandmarks"]["pairs"])
+assert fwd == back, (fwd, back)
+PY
 fi
 
 # ---------------------------------------------------------------- one run per OUTDIR; SIGKILL leaves no result

@@ -48,6 +48,8 @@ configKeys()
         {"relativeGradientTolerance", "--gradient-tolerance"},
         {"landmarkWeight", "--landmark-weight"},
         {"landmarks", "--landmarks"},
+        {"autoLandmarks", "--auto-landmarks"},
+        {"autoLandmarkLevels", "--auto-landmark-levels"},
     };
     return keys;
 }
@@ -125,6 +127,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("energyTolerance") &&
         !params.contains("surfaceFromLevel")) {
         settings.push_back({"surfaceFromLevel", "--surface-from-level", "0"});
+    }
+    // ... and one before automatic landmarks (no autoLandmarks) had none.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("autoLandmarks")) {
+        settings.push_back({"autoLandmarks", "--auto-landmarks", "off"});
     }
     return settings;
 }

@@ -92,6 +92,8 @@ struct MatchCliOptions
     std::optional<int> warmStartLevel;      ///< --warm-start-level L: its first level
     std::vector<std::string> landmarkFiles; ///< --landmarks A B: source and target points
     double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
+    std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
+    int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     bool writeInverse = true;       ///< inverse.vdb
     bool writeJacobian = true;      ///< jacobian.vdb
@@ -261,6 +263,23 @@ matchOptionTable()
         {"--landmark-weight", "X", "Landmarks (an addition to the paper)",
          "c_lm, the weight of the landmark term (its distances in unit-box lengths) (default " + formatNumber(d.landmarkWeight) + ")",
          [](O& o, const std::string& v) { o.landmarkWeight = parseDouble("--landmark-weight", v); }},
+        {"--auto-landmarks", "on|off", "Landmarks (an addition to the paper)",
+         "without --landmarks: find the extremities of both shapes (limb tips, head, tail), pair "
+         "them by their inner distances and use them as landmarks at the first "
+         "--auto-landmark-levels levels (docs/numerics.md) (default " +
+             std::string(MatchOptions::defaults(3).autoLandmarks ? "on" : "off") +
+             "; --preset paper: off)",
+         [](O& o, const std::string& v) {
+             if (v != "on" && v != "off")
+                 throw UsageError("--auto-landmarks expects 'on' or 'off', got '" + v + "'");
+             o.autoLandmarks = v == "on";
+         }},
+        {"--auto-landmark-levels", "N", "Landmarks (an addition to the paper)",
+         "levels, from the first, at which the automatic landmarks act, >= 1 (default " +
+             std::to_string(d.autoLandmarkLevels) + ")",
+         [](O& o, const std::string& v) {
+             o.autoLandmarkLevels = parseInt("--auto-landmark-levels", v);
+         }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
          [](O& o, const std::string& v) { o.maxIterations = parseInt("--max-iterations", v); }},
@@ -692,7 +711,30 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"surfaceFromLevel", opts.multiscale.surfaceFromLevel},
              {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
              {"relativeGradientTolerance", descent.relativeGradientTolerance},
-             {"landmarkWeight", opts.landmarkWeight}});
+             {"landmarkWeight", opts.landmarkWeight},
+             {"autoLandmarks", opts.autoLandmarks ? "on" : "off"},
+             {"autoLandmarkLevels", opts.autoLandmarkLevels}});
+    if (r.autoLandmarks.requested) {
+        const AutoLandmarkSummary& a = r.autoLandmarks;
+        Json pairs = Json::array();
+        for (std::size_t k = 0; k < a.source.size(); ++k) {
+            pairs.push_back(
+                Json{{"source", jsonVec(a.source[k])}, {"target", jsonVec(a.target[k])}});
+        }
+        j["autoLandmarks"] = Json{{"used", a.used},
+                                  {"reason", a.used ? Json() : Json(a.reason)},
+                                  {"sourceExtremities", a.sourceExtremities},
+                                  {"targetExtremities", a.targetExtremities},
+                                  {"distortion", a.distortion},
+                                  {"candidates", a.candidates},
+                                  {"lastLevel", a.lastLevel},
+                                  {"pairs", pairs},
+                                  {"seconds", a.seconds}};
+        if (a.used) {
+            j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
+            j["autoLandmarks"]["meanWorld"] = r.landmarks.meanWorld;
+        }
+    }
     if (!o.landmarkFiles.empty()) {
         params["landmarks"] = o.landmarkFiles;
         j["landmarks"] = Json{{"source", o.landmarkFiles[0]},
@@ -832,6 +874,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         opts.targetLandmarks = b.positions();
     }
     opts.landmarkWeight = o.landmarkWeight;
+    if (o.autoLandmarks) opts.autoLandmarks = *o.autoLandmarks;
+    opts.autoLandmarkLevels = o.autoLandmarkLevels;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
         OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
@@ -1123,8 +1167,19 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         << fixed("%.3e", result.residual.maxWorld) << " (world units; "
         << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
         << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
-        << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n"
-        << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
+        << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n";
+    if (result.autoLandmarks.requested) {
+        const AutoLandmarkSummary& a = result.autoLandmarks;
+        out << "vdb_match: automatic landmarks: ";
+        if (a.used) {
+            out << a.source.size() << " extremities paired (distortion "
+                << fixed("%.3f", a.distortion) << "), used at levels " << opts.multiscale.minLevel
+                << ".." << a.lastLevel << "\n";
+        } else {
+            out << "not used: " << a.reason << "\n";
+        }
+    }
+    out << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
     for (std::size_t i = 1; i < extra.files.size(); ++i)
         out << ", " << extra.files[i];
     out << "\n";
