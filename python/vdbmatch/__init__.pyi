@@ -68,6 +68,8 @@ def match(
     hessian_smoothing: int | None = None,
     landmarks: tuple[Path | npt.ArrayLike, Path | npt.ArrayLike] | None = None,
     landmark_weight: float | None = None,
+    auto_landmarks: str | None = None,
+    auto_landmark_levels: int | None = None,
     max_iterations: int | None = None,
     energy_tolerance: float | None = None,
     settle_tolerance: float | None = None,
