@@ -16,6 +16,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 
 namespace vdbmatch {
 
@@ -121,6 +122,7 @@ MatchOptions::defaults(int dim)
     opts.multiscale.surfaceTolerance =
         dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
     opts.multiscale.coarseMembraneFactor = DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR;
+    opts.autoLandmarks = true;
     return opts;
 }
 
@@ -146,6 +148,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: landmarkWeight must be finite and >= 0, got "
                           << landmarkWeight);
+    }
+    if (!(autoLandmarkMinMotion >= 0) || !std::isfinite(autoLandmarkMinMotion)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: autoLandmarkMinMotion must be finite and >= 0, got "
+                          << autoLandmarkMinMotion);
     }
     if (autoLandmarkLevels < 1) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -285,9 +292,22 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.reason = pairing.reason;
         return out;
     }
-    out.used = true;
+    out.paired = true;
     out.distortion = pairing.distortion;
     out.candidates = pairing.candidates;
+    for (const auto& [i, j] : pairing.pairs)
+        out.maxMotion = std::max(out.maxMotion, (a.points[i] - b.points[j]).norm());
+    out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energy.sigmaFactor *
+                    std::ldexp(1.0, -opts.multiscale.minLevel);
+    if (!(out.maxMotion > out.minMotion)) {
+        std::ostringstream s;
+        s << "every extremity moves by less than " << opts.autoLandmarkMinMotion
+          << " sigma of the first level (at most " << out.maxMotion << " against " << out.minMotion
+          << ", unit box): the shape energy alone decides";
+        out.reason = s.str();
+        return out;
+    }
+    out.used = true;
     out.lastLevel = opts.multiscale.minLevel + opts.autoLandmarkLevels - 1;
     const auto world = [&](const Vec<D>& p) {
         return placement.toWorld(openvdb::Vec3d(p[0], p[1], D == 3 ? p[D - 1] : 0.5));

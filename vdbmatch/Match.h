@@ -169,14 +169,19 @@ struct MatchOptions
     /// paired by their inner distances (geometry/ExtremityMatching.h), are the landmarks of the
     /// first autoLandmarkLevels levels only: they choose which limb goes where at the coarse
     /// levels, and the finer levels follow the shape energy alone. When the extremities cannot
-    /// be paired, the match runs without (MatchResult::autoLandmarks says why).
+    /// be paired, or move less than autoLandmarkMinMotion, the match runs without
+    /// (MatchResult::autoLandmarks says why). On in defaults(), off in paper().
     bool autoLandmarks = false;
     /// Levels, from the first, at which the automatic landmarks act (>= 1).
     int autoLandmarkLevels = 2;
+    /// The automatic landmarks act only when some pair lies farther apart than this many sigma
+    /// of the first level (>= 0; 0: always): a smaller motion the shape energy sees by itself.
+    double autoLandmarkMinMotion = 1;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
-    /// DEFAULT_MATCH_METRIC_TOLERANCE: paper(dim) plus the surface test in 3D.
+    /// DEFAULT_MATCH_METRIC_TOLERANCE: paper(dim) plus the surface test, the coarse membrane
+    /// factor and automatic landmarks.
     static MatchOptions defaults(int dim);
     /// The paper's experiment (`--preset paper`): tab:parameters and its levels (4..8 in 3D,
     /// 4..9 in 2D, sigma = 2h), and none of our additions that change the result (no surface
@@ -220,8 +225,11 @@ struct LandmarkResidual
 struct AutoLandmarkSummary
 {
     bool requested = false; ///< autoLandmarks was set and no landmarks were given
-    bool used = false;      ///< the extremities were paired and used as landmarks
+    bool used = false;      ///< the pairs acted as landmarks
     std::string reason;     ///< why not, when requested && !used
+    bool paired = false;    ///< the extremities were paired (used, or every pair moved too little)
+    double maxMotion = 0;   ///< largest |a_k - b_k| of the pairs, Omega units
+    double minMotion = 0;   ///< the threshold, autoLandmarkMinMotion sigma of the first level
     std::size_t sourceExtremities = 0, targetExtremities = 0;
     double distortion = 0;      ///< of the pairing (ExtremityPairing::distortion)
     std::size_t candidates = 0; ///< pairings within the tolerance (ExtremityPairing::candidates)

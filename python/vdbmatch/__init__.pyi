@@ -70,6 +70,7 @@ def match(
     landmark_weight: float | None = None,
     auto_landmarks: str | None = None,
     auto_landmark_levels: int | None = None,
+    auto_landmark_min_motion: float | None = None,
     max_iterations: int | None = None,
     energy_tolerance: float | None = None,
     settle_tolerance: float | None = None,

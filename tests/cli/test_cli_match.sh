@@ -283,25 +283,36 @@ assert lm["result"]["residual"]["meanUnit"] < lm["levels"][-1]["h"] / 2
 assert again["landmarks"] == L and again["result"]["energy"] == lm["result"]["energy"], again["landmarks"]
 PY
     # Automatic landmarks: the figures' five extremities (head, hands, feet), paired, act at
-    # the first two levels only; the reverse run pairs the same points the other way.
+    # the first two levels only; the reverse run pairs the same points the other way. The
+    # bundled pair moves its extremities by less than sigma of level 4: by default the
+    # landmarks do not act (the result is that of --auto-landmarks off), with
+    # --auto-landmark-min-motion 0 they do.
     check auto-landmarks-bad 1 '' "--auto-landmarks expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks yes --quiet
     check auto-landmark-levels-bad 3 '' 'autoLandmarkLevels must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-levels 0 --quiet
-    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on
-    check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6 --auto-landmarks on
+    check auto-landmark-min-motion-bad 3 '' 'autoLandmarkMinMotion must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-min-motion -1 --quiet
+    check match-2d-auto-landmarks-small 0 'automatic landmarks: not used: every extremity moves by less than 1 sigma' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2g" --levels 4..6
+    check match-2d-auto-landmarks-off 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2o" --levels 4..6 --auto-landmarks off
+    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
+    check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     count=$((count + 1))
-    if "$PYTHON" - "$SCRATCH/m2" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
+    if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
 import json, sys
-plain, auto, rev, again = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+plain, auto, rev, again, small = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+G = small["autoLandmarks"]
+assert G["paired"] and not G["used"] and G["maxMotion"] < G["minMotion"] == 0.125, G
+assert small["parameters"]["autoLandmarks"] == "on" and G["pairs"] == [], G
+assert small["result"]["energy"] == plain["result"]["energy"], (small["result"], plain["result"])
 A = auto["autoLandmarks"]
 assert A["used"] and A["reason"] is None and A["sourceExtremities"] == A["targetExtremities"] == 5, A
+assert A["maxMotion"] == G["maxMotion"] and A["minMotion"] == 0, A
 assert A["lastLevel"] == 5 and auto["parameters"]["autoLandmarks"] == "on", A
 assert auto["parameters"]["autoLandmarkLevels"] == 2
 assert A["meanWorld"] < A["startMeanWorld"], A
 # The landmark term acts at levels 4 and 5, not at 6.
 terms = [l["terms"]["landmarks"] for l in auto["levels"]]
 assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
-# Off by default (reported), and a config of the run reproduces it.
+# Off: not reported; a config of the run reproduces it.
 assert "autoLandmarks" not in plain and plain["parameters"]["autoLandmarks"] == "off"
 assert again["autoLandmarks"] == dict(A, seconds=again["autoLandmarks"]["seconds"])
 assert again["result"]["energy"] == auto["result"]["energy"]

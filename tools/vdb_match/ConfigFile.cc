@@ -50,6 +50,7 @@ configKeys()
         {"landmarks", "--landmarks"},
         {"autoLandmarks", "--auto-landmarks"},
         {"autoLandmarkLevels", "--auto-landmark-levels"},
+        {"autoLandmarkMinMotion", "--auto-landmark-min-motion"},
     };
     return keys;
 }

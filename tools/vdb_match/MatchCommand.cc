@@ -94,6 +94,7 @@ struct MatchCliOptions
     double landmarkWeight = DEFAULT_LANDMARK_WEIGHT;
     std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
     int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
+    double autoLandmarkMinMotion = MatchOptions::defaults(3).autoLandmarkMinMotion;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     bool writeInverse = true;       ///< inverse.vdb
     bool writeJacobian = true;      ///< jacobian.vdb
@@ -200,7 +201,7 @@ matchOptionTable()
         {"--preset", "NAME", "Energy (paper tab:parameters)",
          "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
          "our additions that change the result (no surface test, one c_mem at every level, no "
-         "landmarks unless given); "
+         "automatic landmarks, no landmarks unless given); "
          "options given override it (default: default)",
          [](O& o, const std::string& v) {
              if (v != "default" && v != "paper")
@@ -279,6 +280,12 @@ matchOptionTable()
              std::to_string(d.autoLandmarkLevels) + ")",
          [](O& o, const std::string& v) {
              o.autoLandmarkLevels = parseInt("--auto-landmark-levels", v);
+         }},
+        {"--auto-landmark-min-motion", "X", "Landmarks (an addition to the paper)",
+         "the automatic landmarks act only when some extremity moves farther than X sigma of the "
+         "first level, >= 0; 0: always (default " + formatNumber(d.autoLandmarkMinMotion) + ")",
+         [](O& o, const std::string& v) {
+             o.autoLandmarkMinMotion = parseDouble("--auto-landmark-min-motion", v);
          }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
@@ -713,7 +720,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"relativeGradientTolerance", descent.relativeGradientTolerance},
              {"landmarkWeight", opts.landmarkWeight},
              {"autoLandmarks", opts.autoLandmarks ? "on" : "off"},
-             {"autoLandmarkLevels", opts.autoLandmarkLevels}});
+             {"autoLandmarkLevels", opts.autoLandmarkLevels},
+             {"autoLandmarkMinMotion", opts.autoLandmarkMinMotion}});
     if (r.autoLandmarks.requested) {
         const AutoLandmarkSummary& a = r.autoLandmarks;
         Json pairs = Json::array();
@@ -725,6 +733,9 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                                   {"reason", a.used ? Json() : Json(a.reason)},
                                   {"sourceExtremities", a.sourceExtremities},
                                   {"targetExtremities", a.targetExtremities},
+                                  {"paired", a.paired},
+                                  {"maxMotion", a.maxMotion},
+                                  {"minMotion", a.minMotion},
                                   {"distortion", a.distortion},
                                   {"candidates", a.candidates},
                                   {"lastLevel", a.lastLevel},
@@ -876,6 +887,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.landmarkWeight = o.landmarkWeight;
     if (o.autoLandmarks) opts.autoLandmarks = *o.autoLandmarks;
     opts.autoLandmarkLevels = o.autoLandmarkLevels;
+    opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
         OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "

@@ -21,7 +21,8 @@ template <int D> struct InteriorGraph
 {
     int n = 0; ///< nodes per axis minus one (2^level)
     double h = 0;
-    std::vector<float> distance;           ///< signed distance per dense node
+    std::vector<float> distance;           ///< signed distance per dense node (band values)
+    float background = 0;                  ///< |distance| off the band
     std::vector<int64_t> offsets;          ///< linear index offsets of the 3^D - 1 neighbours
     std::vector<std::array<int, D>> steps; ///< the same as lattice steps
     std::vector<double> lengths;           ///< h |offset|
@@ -69,7 +70,11 @@ interiorGraph(const Surface<D>& surface, int level, bool threaded)
     InteriorGraph<D> g;
     g.n = 1 << level;
     g.h = std::ldexp(1.0, -level);
-    const openvdb::FloatGrid::Ptr grid = distanceBox<D>(surface, level, 0, threaded);
+    // A narrow band: its inactive values carry the sign inside (-background), and the depth
+    // inside is found from it (depthInside()), far cheaper than the distance on the whole box.
+    const openvdb::FloatGrid::Ptr grid =
+        distanceBand<D>(surface, level, MIN_DISTANCE_HALF_WIDTH_VOXELS, threaded);
+    g.background = grid->background();
     const auto acc = grid->getConstAccessor();
     const int64_t m = g.n + 1;
     int64_t count = 1;
@@ -101,16 +106,19 @@ interiorGraph(const Surface<D>& surface, int level, bool threaded)
     return g;
 }
 
-/// Graph distances from @a source inside the shape (infinity where unreachable).
+/// Graph distances inside the shape from the nodes of @a sources, which start at their values
+/// there (Dijkstra); infinity where unreachable.
 template <int D>
 std::vector<double>
-innerDistances(const InteriorGraph<D>& g, int64_t source)
+innerDistances(const InteriorGraph<D>& g, const std::vector<std::pair<double, int64_t>>& sources)
 {
     std::vector<double> dist(std::size_t(g.size()), std::numeric_limits<double>::infinity());
     using Entry = std::pair<double, int64_t>;
     std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> queue;
-    dist[std::size_t(source)] = 0;
-    queue.emplace(0.0, source);
+    for (const auto& [d0, i] : sources) {
+        dist[std::size_t(i)] = d0;
+        queue.emplace(d0, i);
+    }
     while (!queue.empty()) {
         const auto [d, i] = queue.top();
         queue.pop();
@@ -124,6 +132,28 @@ innerDistances(const InteriorGraph<D>& g, int64_t source)
         });
     }
     return dist;
+}
+
+template <int D>
+std::vector<double>
+innerDistances(const InteriorGraph<D>& g, int64_t source)
+{
+    return innerDistances(g, {{0.0, source}});
+}
+
+/// Depth of every node inside the shape: its distance to the surface within the band, and
+/// beyond it that distance plus the graph distance to the band (an upper bound, close for the
+/// lattice's 3^D - 1 neighbours).
+template <int D>
+std::vector<double>
+depthInside(const InteriorGraph<D>& g, float background)
+{
+    std::vector<std::pair<double, int64_t>> band;
+    for (int64_t i = 0; i < g.size(); ++i) {
+        const float d = g.distance[std::size_t(i)];
+        if (d < 0 && d > -background) band.emplace_back(-double(d), i);
+    }
+    return innerDistances(g, band);
 }
 
 /// Persistence of every local maximum of @a f over the superlevel-set filtration (see the file
@@ -190,13 +220,19 @@ findExtremities(const Surface<D>& unitSurface, const ExtremityOptions& opts)
 
     // The root: among the nodes within h of the greatest depth, the one nearest to their
     // centroid (an elongated body has a ridge of deepest nodes: take its middle).
-    float deepest = 0;
+    const std::vector<double> depth = depthInside(g, g.background);
+    double deepest = 0;
     for (int64_t i = 0; i < g.size(); ++i)
-        deepest = std::min(deepest, g.distance[std::size_t(i)]);
+        if (g.inside(i) && std::isfinite(depth[std::size_t(i)]))
+            deepest = std::max(deepest, depth[std::size_t(i)]);
+    const auto isDeep = [&](int64_t i) {
+        return g.inside(i) && std::isfinite(depth[std::size_t(i)]) &&
+               depth[std::size_t(i)] >= deepest - g.h;
+    };
     Vec<D> centroid = Vec<D>::Zero();
     std::size_t deep = 0;
     for (int64_t i = 0; i < g.size(); ++i) {
-        if (g.inside(i) && g.distance[std::size_t(i)] <= deepest + g.h) {
+        if (isDeep(i)) {
             centroid += g.position(i);
             ++deep;
         }
@@ -206,7 +242,7 @@ findExtremities(const Surface<D>& unitSurface, const ExtremityOptions& opts)
         centroid /= double(deep);
         double nearest = INF;
         for (int64_t i = 0; i < g.size(); ++i) {
-            if (!g.inside(i) || g.distance[std::size_t(i)] > deepest + g.h) continue;
+            if (!isDeep(i)) continue;
             const double r = (g.position(i) - centroid).squaredNorm();
             if (r < nearest) {
                 nearest = r;
@@ -229,14 +265,14 @@ findExtremities(const Surface<D>& unitSurface, const ExtremityOptions& opts)
         return a.second != b.second ? a.second > b.second : a.first < b.first;
     });
     std::vector<int64_t> tips;
-    const double depth = -double(g.distance[std::size_t(root)]);
+    const double rootDepth = depth[std::size_t(root)];
     for (const auto& [node, persistence] : maxima) {
         if (!(persistence >= opts.minPersistence * result.maxRootDistance)) break;
         tips.push_back(node);
         result.tips.push_back(g.position(node));
         result.persistence.push_back(persistence);
         // The end of the branch: the nodes connected to the tip with f >= f(tip) - rho.
-        const double rho = std::min(0.5 * persistence, depth);
+        const double rho = std::min(0.5 * persistence, rootDepth);
         const double floor = f[std::size_t(node)] - rho;
         std::vector<int64_t> stack{node};
         Vec<D> sum = Vec<D>::Zero();

@@ -4,11 +4,11 @@
 ///        has no landmarks; docs/numerics.md "Automatic landmarks").
 ///
 /// On the nodes of the dense lattice of spacing h = 2^-level in Omega that lie inside the shape
-/// (signed distance < 0; distanceBox()), joined to their 3^D - 1 neighbours by segments of length
-/// h |offset|:
-/// 1. the root r is a deepest node (of those within h of the largest distance to the surface,
-///    the one nearest to their centroid) and f(x) the graph distance from r inside the shape
-///    (Dijkstra), an
+/// (signed distance < 0: the sign of a narrow band, distanceBand()), joined to their 3^D - 1
+/// neighbours by segments of length h |offset|:
+/// 1. the root r is a deepest node (of those within h of the largest depth, the one nearest to
+///    their centroid; the depth is the band's distance, carried inside by graph distance) and
+///    f(x) the graph distance from r inside the shape (Dijkstra), an
 ///    approximation of the inner distance, which articulation changes little;
 /// 2. every local maximum of f is the end of a branch, and its persistence the length of that
 ///    branch: in the superlevel sets {f >= t}, t decreasing, the maximum starts a component, and
@@ -67,7 +67,7 @@ template <int D> struct Extremities
 
 /// The extremities of a closed surface given in Omega units.
 /// @throw openvdb::ValueError if the surface fails checkSurface(), the level is out of the range
-///        of distanceBox(), minPersistence is not in (0, 1], or no lattice node lies inside
+///        of distanceBand(), minPersistence is not in (0, 1], or no lattice node lies inside
 template <int D>
 Extremities<D> findExtremities(const Surface<D>& unitSurface,
                                const ExtremityOptions& opts = ExtremityOptions());
