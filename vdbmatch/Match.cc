@@ -347,7 +347,12 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     result.placement = placement;
     // The landmarks act at every level, automatic ones at the first autoLandmarkLevels only.
     int lastLandmarkLevel = std::numeric_limits<int>::max();
-    if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
+    if (opts.autoLandmarks && opts.sourceLandmarks.empty() && opts.initial) {
+        // An earlier result already carries the correspondence, and its first level may be
+        // fine, where landmarks as imprecise as these would only pull it off.
+        result.autoLandmarks.requested = true;
+        result.autoLandmarks.reason = "the run starts from an earlier result";
+    } else if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
         result.autoLandmarks = autoLandmarks(unitSource, unitTarget, placement, opts);
         lastLandmarkLevel = result.autoLandmarks.lastLevel;
         opts.sourceLandmarks = result.autoLandmarks.source;

@@ -169,8 +169,9 @@ struct MatchOptions
     /// paired by their inner distances (geometry/ExtremityMatching.h), are the landmarks of the
     /// first autoLandmarkLevels levels only: they choose which limb goes where at the coarse
     /// levels, and the finer levels follow the shape energy alone. When the extremities cannot
-    /// be paired, or move less than autoLandmarkMinMotion, the match runs without
-    /// (MatchResult::autoLandmarks says why). On in defaults(), off in paper().
+    /// be paired, or move less than autoLandmarkMinMotion, or the run starts from `initial`,
+    /// the match runs without (MatchResult::autoLandmarks says why). On in defaults(), off in
+    /// paper().
     bool autoLandmarks = false;
     /// Levels, from the first, at which the automatic landmarks act (>= 1).
     int autoLandmarkLevels = 2;

@@ -50,6 +50,9 @@ assert [l["level"] for l in r["levels"]] == [6], [l["level"] for l in r["levels"
 assert r["parameters"]["minLevel"] == 4 and r["parameters"]["maxLevel"] == 6
 assert r["result"]["minJacobian"] > 0
 assert a["init"] is None and s["init"] is None
+# Automatic landmarks (on by default) do not act on a run that starts from an earlier result.
+A = r["autoLandmarks"]
+assert not A["used"] and A["reason"] == "the run starts from an earlier result", A
 # As good as 4..6 from scratch, computing one level instead of three. The level-6 energy of
 # this pair lands anywhere in 1.49..1.83 depending on the last digits of the arithmetic (two
 # builds that differ only in rounding gave continued / scratch = 1.56 / 1.83 and 1.82 / 1.49:
