@@ -358,6 +358,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         opts.sourceLandmarks = result.autoLandmarks.source;
         opts.targetLandmarks = result.autoLandmarks.target;
     }
+    if (result.autoLandmarks.requested && observer.autoLandmarks)
+        observer.autoLandmarks(result.autoLandmarks);
     // Landmarks in Omega units; the source points must lie inside Omega (the target points
     // need not: the term pulls phi(a_k) towards them).
     LandmarkPairs<D> landmarks;

@@ -279,6 +279,8 @@ struct MatchObserver
     solver::IterationObserver iteration;
     std::function<void(const LevelSummary&)> levelStart;
     std::function<void(const LevelSummary&)> levelEnd;
+    /// After the automatic landmarks were looked for, before the first level (when requested).
+    std::function<void(const AutoLandmarkSummary&)> autoLandmarks;
 };
 
 /// Matches @a source (M1) onto @a target (M2).

@@ -107,6 +107,18 @@ struct MatchCliOptions
     std::string commandLine;
 };
 
+/// One line on what the automatic landmarks did.
+std::string
+autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
+{
+    if (!a.used) return "automatic landmarks: not used: " + a.reason;
+    return "automatic landmarks: " + std::to_string(a.source.size()) +
+           " extremities paired (distortion " + fixed("%.3f", a.distortion) + ", largest motion " +
+           fixed("%.3g", a.maxMotion) + " > " + fixed("%.3g", a.minMotion) +
+           " of the unit box), acting at levels " + std::to_string(firstLevel) + ".." +
+           std::to_string(a.lastLevel);
+}
+
 std::vector<Option<MatchCliOptions>>
 matchOptionTable()
 {
@@ -970,6 +982,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     };
     observer.iteration = [&](const solver::IterationInfo& i) { progress->iteration(i); };
     observer.levelEnd = [&](const LevelSummary& s) { progress->levelEnd(s); };
+    observer.autoLandmarks = [&](const AutoLandmarkSummary& a) {
+        progress->message(autoLandmarkLine(a, opts.multiscale.minLevel));
+    };
 
     SignalInterrupter interrupter;
     // A start that folds on the new lattice: --init, an earlier result of the same pair, is
@@ -1180,17 +1195,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
         << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
         << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n";
-    if (result.autoLandmarks.requested) {
-        const AutoLandmarkSummary& a = result.autoLandmarks;
-        out << "vdb_match: automatic landmarks: ";
-        if (a.used) {
-            out << a.source.size() << " extremities paired (distortion "
-                << fixed("%.3f", a.distortion) << "), used at levels " << opts.multiscale.minLevel
-                << ".." << a.lastLevel << "\n";
-        } else {
-            out << "not used: " << a.reason << "\n";
-        }
-    }
+    if (result.autoLandmarks.requested)
+        out << "vdb_match: " << autoLandmarkLine(result.autoLandmarks, opts.multiscale.minLevel)
+            << "\n";
     out << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
     for (std::size_t i = 1; i < extra.files.size(); ++i)
         out << ", " << extra.files[i];
