@@ -55,6 +55,19 @@ armEnd(const std::vector<double>& arms, double turn, std::size_t k)
     return CENTRE + arms[k] * Vec<2>(std::cos(a), std::sin(a));
 }
 
+/// Each pair (i, j) of @a p joins a's extremity i to b's extremity j at its image by the turn
+/// about CENTRE (the extremities of a star turned rigidly turn with it).
+void
+expectPairedByTurn(const Extremities<2>& a, const Extremities<2>& b, const ExtremityPairing& p,
+                   double turn)
+{
+    const Eigen::Rotation2D<double> rotate(turn);
+    for (const auto& [i, j] : p.pairs) {
+        const Vec<2> image = CENTRE + rotate * (a.points[i] - CENTRE);
+        EXPECT_LT((b.points[j] - image).norm(), 0.03) << "extremity " << i;
+    }
+}
+
 const std::vector<double> UNEQUAL{0.40, 0.22, 0.34, 0.28, 0.38};
 const std::vector<double> EQUAL{0.35, 0.35, 0.35, 0.35, 0.35};
 constexpr double INNER = 0.09;
@@ -141,11 +154,7 @@ TEST(ExtremityMatching, AStarTurnedFarIsPairedByInnerDistancesNotByNearness)
     const ExtremityPairing p = matchExtremities<2>(a, b);
     ASSERT_TRUE(p.ok) << p.reason;
     ASSERT_EQ(p.pairs.size(), UNEQUAL.size());
-    const Eigen::Rotation2D<double> rotate(turn);
-    for (const auto& [i, j] : p.pairs) {
-        const Vec<2> image = CENTRE + rotate * (a.points[i] - CENTRE);
-        EXPECT_LT((b.points[j] - image).norm(), 0.03) << "extremity " << i;
-    }
+    expectPairedByTurn(a, b, p, turn);
     EXPECT_LT(p.distortion, 0.03);
     // Symmetric: matching back gives the inverse pairing.
     const ExtremityPairing back = matchExtremities<2>(b, a);
@@ -163,11 +172,7 @@ TEST(ExtremityMatching, ASymmetricStarIsPairedByNearness)
     const ExtremityPairing p = matchExtremities<2>(a, b);
     ASSERT_TRUE(p.ok) << p.reason;
     EXPECT_GE(p.candidates, 5u);
-    const Eigen::Rotation2D<double> rotate(turn);
-    for (const auto& [i, j] : p.pairs) {
-        const Vec<2> image = CENTRE + rotate * (a.points[i] - CENTRE);
-        EXPECT_LT((b.points[j] - image).norm(), 0.03) << "extremity " << i;
-    }
+    expectPairedByTurn(a, b, p, turn);
 }
 
 TEST(ExtremityMatching, DifferentBranchesAreRefused)
