@@ -8,6 +8,7 @@
 #include <vdbmatch/io/DeformationIO.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
 
@@ -17,6 +18,7 @@
 
 using namespace vdbmatch;
 using test::ellipseCurve;
+using test::starCurve;
 
 namespace {
 
@@ -264,6 +266,51 @@ TEST(Match, ThreadCountIndependence3D)
     EXPECT_EQ(results[0].levels.back().report.convergedBy, solver::ConvergenceTest::SurfaceSettled);
     ASSERT_EQ(results[0].displacement.cols(), results[1].displacement.cols());
     EXPECT_TRUE((results[0].displacement.array() == results[1].displacement.array()).all());
+}
+
+TEST(Match, AutomaticLandmarksFollowAStarTurnedFar)
+{
+    // A star with five arms of different lengths (72 degrees apart) onto the same star turned by
+    // 70 degrees: each arm's end is nearer to another arm of the target than to its own image,
+    // so the shape energy alone sends arms to the wrong arms. The automatic landmarks (on by
+    // default) pair the arms by their inner distances and turn them; --preset paper has none.
+    const std::vector<double> arms{0.40, 0.22, 0.34, 0.28, 0.38};
+    const Vec<2> centre(0, 0);
+    const Real turn = 70 * M_PI / 180;
+    const Surface<2> a = starCurve(centre, arms, 0.09, 0.3);
+    const Surface<2> b = starCurve(centre, arms, 0.09, 0.3 + turn);
+    MatchOptions on = MatchOptions::defaults(2);
+    on.multiscale.minLevel = 4;
+    on.multiscale.maxLevel = 6;
+    MatchOptions off = on;
+    off.autoLandmarks = false;
+    const UnitBoxPlacement placement = placeInUnitBox(a, b, on.margin);
+    const MatchResult<2> guided = match<2>(a, b, placement, on);
+    const MatchResult<2> free = match<2>(a, b, placement, off);
+    ASSERT_TRUE(guided.isComplete());
+    ASSERT_TRUE(free.isComplete());
+    EXPECT_TRUE(guided.autoLandmarks.requested);
+    ASSERT_TRUE(guided.autoLandmarks.used) << guided.autoLandmarks.reason;
+    EXPECT_EQ(guided.autoLandmarks.source.size(), arms.size());
+    EXPECT_EQ(guided.autoLandmarks.lastLevel, 5);
+    EXPECT_FALSE(free.autoLandmarks.requested);
+    // Mean distance of phi(v) to v's true image, against the mean motion of the vertices.
+    const Eigen::Rotation2D<Real> rotate(turn);
+    const auto error = [&](const MatchResult<2>& r) {
+        Real e = 0;
+        for (std::size_t i = 0; i < a.points.size(); ++i)
+            e += (r.deformedSource.points[i] - rotate * a.points[i]).norm();
+        return e / Real(a.points.size());
+    };
+    Real motion = 0;
+    for (const Vec<2>& p : a.points)
+        motion += (rotate * p - p).norm();
+    motion /= Real(a.points.size());
+    EXPECT_GT(error(free), 0.5 * motion);   // measured 1.03
+    EXPECT_LT(error(guided), 0.1 * motion); // measured 0.025
+    EXPECT_GT(guided.minJacobian, 0);
+    const Real halfCell = placement.toWorldLength(0.5 * std::ldexp(1.0, -on.multiscale.maxLevel));
+    EXPECT_LT(guided.residual.meanWorld, halfCell);
 }
 
 TEST(Match, LandmarksTurnACircleNoShapeEnergyCanTell)

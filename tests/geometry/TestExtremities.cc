@@ -22,30 +22,10 @@ namespace {
 
 const Vec<2> CENTRE(0.5, 0.5);
 
-/// A star polygon about CENTRE: arm k ends at radius arms[k] in the direction turn + 2 pi k / n,
-/// the notches between arms at radius `inner`; 24 points per edge.
 Surface<2>
 star(const std::vector<double>& arms, double inner, double turn)
 {
-    const int n = int(arms.size());
-    std::vector<Vec<2>> corners;
-    for (int k = 0; k < n; ++k) {
-        const double a = turn + 2 * M_PI * k / n, b = a + M_PI / n;
-        corners.push_back(CENTRE + arms[std::size_t(k)] * Vec<2>(std::cos(a), std::sin(a)));
-        corners.push_back(CENTRE + inner * Vec<2>(std::cos(b), std::sin(b)));
-    }
-    Surface<2> s;
-    const int per = 24;
-    for (std::size_t c = 0; c < corners.size(); ++c) {
-        const Vec<2>& p = corners[c];
-        const Vec<2>& q = corners[(c + 1) % corners.size()];
-        for (int i = 0; i < per; ++i)
-            s.points.push_back(p + (q - p) * (double(i) / per));
-    }
-    const int m = int(s.points.size());
-    for (int i = 0; i < m; ++i)
-        s.elements.push_back({int32_t(i), int32_t((i + 1) % m)});
-    return s;
+    return starCurve(CENTRE, arms, inner, turn);
 }
 
 Vec<2>

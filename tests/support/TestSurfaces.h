@@ -12,6 +12,7 @@
 #include <string>
 #include <system_error>
 #include <unistd.h>
+#include <vector>
 
 namespace vdbmatch {
 namespace test {
@@ -95,6 +96,33 @@ circle(const Vec<2>& centre, double radius, int n)
 {
     Surface<2> s;
     addCircle(s, centre, radius, n);
+    return s;
+}
+
+/// A star polygon about @a centre: arm k ends at radius arms[k] in the direction
+/// turn + 2 pi k / n, the notches between arms at radius @a inner; @a perEdge points per edge,
+/// counter-clockwise.
+inline Surface<2>
+starCurve(const Vec<2>& centre, const std::vector<double>& arms, double inner, double turn,
+          int perEdge = 24)
+{
+    const int n = int(arms.size());
+    std::vector<Vec<2>> corners;
+    for (int k = 0; k < n; ++k) {
+        const double a = turn + 2 * M_PI * k / n, b = a + M_PI / n;
+        corners.push_back(centre + arms[size_t(k)] * Vec<2>(std::cos(a), std::sin(a)));
+        corners.push_back(centre + inner * Vec<2>(std::cos(b), std::sin(b)));
+    }
+    Surface<2> s;
+    for (size_t c = 0; c < corners.size(); ++c) {
+        const Vec<2>& p = corners[c];
+        const Vec<2>& q = corners[(c + 1) % corners.size()];
+        for (int i = 0; i < perEdge; ++i)
+            s.points.push_back(p + (q - p) * (double(i) / perEdge));
+    }
+    const int m = int(s.points.size());
+    for (int i = 0; i < m; ++i)
+        s.elements.push_back({int32_t(i), int32_t((i + 1) % m)});
     return s;
 }
 
