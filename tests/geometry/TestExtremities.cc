@@ -114,14 +114,17 @@ TEST(Extremities, AnElongatedBoxHasTwoEnds)
     EXPECT_NEAR(e.innerDistance(0, 1), 0.6, 0.1);
 }
 
-TEST(Extremities, BadInputIsRefused)
+TEST(Extremities, BadOptionsAreRefusedAThinShapeHasNone)
 {
     ExtremityOptions o;
     o.minPersistence = 0;
     EXPECT_THROW(findExtremities<2>(star(UNEQUAL, INNER, 0), o), openvdb::ValueError);
     o.minPersistence = 0.1;
-    o.level = 3; // no lattice node inside a small circle
-    EXPECT_THROW(findExtremities<2>(circle(Vec<2>(0.56, 0.56), 0.04, 64), o), openvdb::ValueError);
+    o.level = 3; // no lattice node inside a small circle: no extremities, not an error
+    const Extremities<2> none = findExtremities<2>(circle(Vec<2>(0.56, 0.56), 0.04, 64), o);
+    EXPECT_EQ(none.size(), 0u);
+    EXPECT_EQ(none.insideNodes, 0u);
+    EXPECT_EQ(none.innerDistance.size(), 0);
 }
 
 TEST(ExtremityMatching, AStarTurnedFarIsPairedByInnerDistancesNotByNearness)

@@ -250,10 +250,7 @@ findExtremities(const Surface<D>& unitSurface, const ExtremityOptions& opts)
             }
         }
     }
-    if (root < 0) {
-        OPENVDB_THROW(openvdb::ValueError, "findExtremities: no node of the level-"
-                                               << result.level << " lattice lies inside the shape");
-    }
+    if (root < 0) return result; // thinner than the lattice: no extremities (insideNodes = 0)
     result.root = g.position(root);
     const std::vector<double> f = innerDistances(g, root);
     std::vector<std::pair<int64_t, double>> maxima = maximaPersistence(g, f);

@@ -66,8 +66,10 @@ template <int D> struct Extremities
 };
 
 /// The extremities of a closed surface given in Omega units.
+/// A shape with no lattice node inside (thinner than h everywhere) has no extremities and
+/// insideNodes = 0.
 /// @throw openvdb::ValueError if the surface fails checkSurface(), the level is out of the range
-///        of distanceBand(), minPersistence is not in (0, 1], or no lattice node lies inside
+///        of distanceBand(), or minPersistence is not in (0, 1]
 template <int D>
 Extremities<D> findExtremities(const Surface<D>& unitSurface,
                                const ExtremityOptions& opts = ExtremityOptions());
