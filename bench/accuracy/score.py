@@ -16,6 +16,10 @@ unit = scale * (world - worldOrigin), so a world length is multiplied by placeme
   psi.phi     mean |psi(phi(v)) - v| over M1's vertices (vdb_match consistency,
               psi_phi.relative.shape_mean: relative to the domain size = 1/scale)
   min det     result.minJacobian of the forward report
+--tsv also splits the error between the vertices g keeps still (|g(v) - v| < STILL, 5e-3 of the
+unit box) and those it moves: err_still_mean, err_moving_mean, still_fraction (of the vertices)
+and still_error_share (of the summed error). A large share on still vertices means the match
+drags what stays along with what moves (docs/results.md, "What limits the correspondence").
 --tsv appends the same figures (and a few more) as a tab-separated line, with a header if the
 file is new.
 """
@@ -26,6 +30,8 @@ import os
 import sys
 
 import numpy as np
+
+STILL = 5e-3  # unit-box units: a vertex g moves by less is "still"
 
 COLUMNS = ("pair", "dim", "energy", "levels", "fwd s", "rev s", "resid", "err mean", "err p95",
            "rev err", "motion", "psi.phi", "min det", "status")
@@ -94,6 +100,7 @@ def main():
     err = np.linalg.norm(phi - truth, axis=1) * scale
     rev_err = np.linalg.norm(psi_g - source, axis=1) * scale
     motion = pair["motion"]["meanWorld"] * scale
+    still = np.linalg.norm(truth - source, axis=1) * scale < STILL
     resid = fwd["result"]["residual"]["meanUnit"]
     psiphi = cons["psi_phi"]["relative"]["shape_mean"]
     min_det = fwd["result"]["minJacobian"]
@@ -122,6 +129,10 @@ def main():
             "min_det": min_det, "reverse_min_det": rev["result"]["minJacobian"],
             "forward_iterations": sum(l["iterations"] for l in fwd["levels"]),
             "status": fwd["status"], "reverse_status": rev["status"],
+            "still_fraction": float(still.mean()),
+            "err_still_mean": float(err[still].mean()) if still.any() else float("nan"),
+            "err_moving_mean": float(err[~still].mean()) if (~still).any() else float("nan"),
+            "still_error_share": float(err[still].sum() / err.sum()) if err.sum() > 0 else 0.0,
         }
         new = not os.path.exists(a.tsv)
         with open(a.tsv, "a") as f:

@@ -19,14 +19,17 @@ PYTHON=${VDBMATCH_PYTHON:-python3}
 
 source "$(dirname "$0")/common.sh"
 
-# same_energy NAME LEVEL SOURCE TARGET: energy --json total == match --levels L..L initial energy
-# (without automatic landmarks, whose term `energy` does not have).
+# same_energy NAME LEVEL SOURCE TARGET DIM [OPTIONS...]: energy --json total == match --levels L..L
+# initial energy, both with OPTIONS (without automatic landmarks, whose term `energy` does not
+# have). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
+# runs also check that both commands default to the same c_vol.
 same_energy() {
     local name=$1 level=$2 source=$3 target=$4 dim=$5
+    shift 5
     count=$((count + 1))
-    "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
+    "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet "$@" >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
         "$VDB_MATCH" "$source" "$target" -o "$SCRATCH/$name" --levels "$level..$level" --max-iterations 0 \
-            --auto-landmarks off --quiet --no-inverse --no-jacobian >/dev/null 2>>"$SCRATCH/err"
+            --auto-landmarks off --quiet --no-inverse --no-jacobian "$@" >/dev/null 2>>"$SCRATCH/err"
     local code=$?
     if [ "$code" -eq 0 ] && "$PYTHON" - "$SCRATCH/$name.json" "$SCRATCH/$name/report.json" "$dim" <<'PY'; then
 import json, sys
@@ -39,7 +42,8 @@ assert e["simplices"] == cells * (2 if dim == 2 else 6), e["simplices"]
 initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
-assert e["parameters"]["cMatch"] == m["parameters"]["cMatch"]
+for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta"):
+    assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"
     else
@@ -51,6 +55,8 @@ PY
 same_energy polyline-2d 6 "$FIGURE_A" "$FIGURE_B" 2
 same_energy slice-2d 6 "$SLICE_A" "$SLICE_B" 2
 same_energy level-set-3d 4 "$SPHERE" "$ELLIPSOID" 3
+same_energy directional-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --energy directional
+same_energy directional-3d 4 "$SPHERE" "$ELLIPSOID" 3 --energy directional --c-vol 2
 
 # A mesh (match's deformed.obj of the sphere) against a level set.
 "$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m" --levels 3..3 --quiet --no-inverse --no-jacobian >/dev/null 2>&1
