@@ -15,7 +15,8 @@
 #   psi.phi       mean |psi(phi(v)) - v| over M1's vertices (vdb_match consistency)
 #   min det       min det D phi of the forward match (report.json result.minJacobian)
 # and per energy the mean of these over the pairs. results.tsv in the output directory holds the
-# same and more (max errors, reverse figures, iterations, statuses).
+# same and more (max errors, reverse figures, iterations, statuses, the error on the vertices g
+# keeps still and on those it moves: score.py).
 #
 # Usage: bench/bench_accuracy.sh [VDB_MATCH] [--pairs a,b,...] [--levels3d 4..7] [--levels2d 4..9]
 #            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
