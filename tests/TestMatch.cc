@@ -202,6 +202,22 @@ TEST(Match, SphereToEllipsoid3D)
     checkMatch<3>(sphere, ellipsoid, opts);
 }
 
+TEST(Match, MembraneSaturationAtTheFirstTwoLevelsIsThe3DDefault)
+{
+    // An addition to the paper (math/Saturation.h): the 3D default, not the 2D one, and never
+    // the paper's experiment.
+    const MatchOptions d3 = MatchOptions::defaults(3), d2 = MatchOptions::defaults(2);
+    EXPECT_EQ(d3.multiscale.energy.membraneSaturation, DEFAULT_MATCH_MEMBRANE_SATURATION_3D);
+    EXPECT_GT(d3.multiscale.energy.membraneSaturation, 0.0);
+    EXPECT_EQ(d3.multiscale.membraneSaturationLevels, DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS);
+    EXPECT_EQ(d3.multiscale.energyAt(d3.multiscale.minLevel + 1).membraneSaturation,
+              DEFAULT_MATCH_MEMBRANE_SATURATION_3D);
+    EXPECT_EQ(d3.multiscale.energyAt(d3.multiscale.minLevel + 2).membraneSaturation, 0.0);
+    EXPECT_EQ(d2.multiscale.energy.membraneSaturation, DEFAULT_MATCH_MEMBRANE_SATURATION_2D);
+    EXPECT_EQ(MatchOptions::paper(3).multiscale.energy.membraneSaturation, 0.0);
+    EXPECT_EQ(MatchOptions::paper(2).multiscale.energy.membraneSaturation, 0.0);
+}
+
 TEST(Match, RejectsShapesOutsideTheBox)
 {
     const Surface<2> a = ellipseCurve(Vec<2>(0, 0), 1, 1, 64);

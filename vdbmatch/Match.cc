@@ -122,6 +122,9 @@ MatchOptions::defaults(int dim)
     opts.multiscale.surfaceTolerance =
         dim == 2 ? DEFAULT_MATCH_SURFACE_TOLERANCE_2D : DEFAULT_MATCH_SURFACE_TOLERANCE_3D;
     opts.multiscale.coarseMembraneFactor = DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR;
+    opts.multiscale.energy.membraneSaturation =
+        dim == 2 ? DEFAULT_MATCH_MEMBRANE_SATURATION_2D : DEFAULT_MATCH_MEMBRANE_SATURATION_3D;
+    opts.multiscale.membraneSaturationLevels = DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS;
     opts.autoLandmarks = true;
     return opts;
 }

@@ -73,6 +73,7 @@ EnergyParameters::validate() const
     inRange("c_vol", cVol, 0, MAX_COEFFICIENT);
     inRange("q", q, 0, MAX_EXPONENT);
     inRange("theta", theta, 0, MAX_EXPONENT);
+    inRange("membrane saturation", membraneSaturation, 0, MAX_COEFFICIENT);
     if (!std::isfinite(tau) || tau <= 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "EnergyParameters: tau must be finite and > 0, got " << tau);

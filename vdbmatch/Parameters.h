@@ -43,13 +43,17 @@ struct EnergyParameters
     Real tau = 1.0;
     /// Band half-width as a multiple of h: sigma = sigmaFactor * h (tab:parameters: 2).
     Real sigmaFactor = 2.0;
+    /// Membrane saturation s, an addition to the paper: both membrane densities of eq:EsymMem
+    /// are taken through psi_s(w) = s log(1 + w/s) (math/Saturation.h), which lets a joint's
+    /// stretch stay at the joint instead of spreading over the surface. 0: the paper's W.
+    Real membraneSaturation = 0.0;
 
     /// The defaults of tab:parameters for dimension 2 (Jump example) or 3 (Dolphin, Starfish).
     static EnergyParameters defaults(int dim);
 
     /// Throws openvdb::ValueError naming the first invalid field: coefficients must be finite
     /// in [0, MAX_COEFFICIENT], q and theta in [0, MAX_EXPONENT], tau > 0,
-    /// sigmaFactor > 0.
+    /// sigmaFactor > 0, membraneSaturation finite in [0, MAX_COEFFICIENT].
     void validate() const;
 };
 

@@ -71,7 +71,7 @@ def main():
         for _, rows in runs:
             r = rows.get(pair)
             cells.append("%.3g" % (1e3 * float(r["err_mean"])) if r else "")
-            if r and motion is None:
+            if r and motion is None and r.get("motion_mean"):  # tables of err_mean only lack it
                 motion = float(r["motion_mean"])
         best_peer, best_name = None, None
         for name in peer_names:

@@ -60,6 +60,8 @@ def match(
     c_match: float | None = None,
     c_mem: float | None = None,
     coarse_membrane_factor: float | None = None,
+    membrane_saturation: float | None = None,
+    membrane_saturation_levels: int | None = None,
     c_bend: float | None = None,
     c_vol: float | None = None,
     q: float | None = None,
@@ -106,6 +108,7 @@ def energy(
     q: float | None = None,
     theta: float | None = None,
     tau: float | None = None,
+    membrane_saturation: float | None = None,
     hessian_smoothing: int | None = None,
     threads: int | None = None,
 ) -> dict[str, Any]: ...

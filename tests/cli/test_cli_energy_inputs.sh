@@ -21,7 +21,8 @@ source "$(dirname "$0")/common.sh"
 
 # same_energy NAME LEVEL SOURCE TARGET DIM [OPTIONS...]: energy --json total == match --levels L..L
 # initial energy, both with OPTIONS (without automatic landmarks, whose term `energy` does not
-# have). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
+# have, and with the paper's membrane density unless OPTIONS saturate it: match's default
+# saturates it at its first levels, `energy`'s does not). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
 # runs also check that both commands default to the same c_vol.
 same_energy() {
     local name=$1 level=$2 source=$3 target=$4 dim=$5
@@ -29,7 +30,7 @@ same_energy() {
     count=$((count + 1))
     "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet "$@" >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
         "$VDB_MATCH" "$source" "$target" -o "$SCRATCH/$name" --levels "$level..$level" --max-iterations 0 \
-            --auto-landmarks off --quiet --no-inverse --no-jacobian "$@" >/dev/null 2>>"$SCRATCH/err"
+            --auto-landmarks off --membrane-saturation 0 --quiet --no-inverse --no-jacobian "$@" >/dev/null 2>>"$SCRATCH/err"
     local code=$?
     if [ "$code" -eq 0 ] && "$PYTHON" - "$SCRATCH/$name.json" "$SCRATCH/$name/report.json" "$dim" <<'PY'; then
 import json, sys
@@ -42,7 +43,7 @@ assert e["simplices"] == cells * (2 if dim == 2 else 6), e["simplices"]
 initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
-for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta"):
+for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation"):
     assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"
@@ -57,6 +58,21 @@ same_energy slice-2d 6 "$SLICE_A" "$SLICE_B" 2
 same_energy level-set-3d 4 "$SPHERE" "$ELLIPSOID" 3
 same_energy directional-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --energy directional
 same_energy directional-3d 4 "$SPHERE" "$ELLIPSOID" 3 --energy directional --c-vol 2
+same_energy saturated-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --membrane-saturation 0.01
+same_energy saturated-3d 4 "$SPHERE" "$ELLIPSOID" 3 --membrane-saturation 0.01
+# The saturation lowers the membrane term only (an addition: s log(1 + W/s) <= W).
+count=$((count + 1))
+if "$VDB_MATCH" energy "$FIGURE_A" "$FIGURE_B" --level 6 --json --quiet >"$SCRATCH/e0.json" &&
+    "$VDB_MATCH" energy "$FIGURE_A" "$FIGURE_B" --level 6 --json --quiet --membrane-saturation 0.01 >"$SCRATCH/e1.json" &&
+    "$PYTHON" - "$SCRATCH/e0.json" "$SCRATCH/e1.json" <<'PY'; then echo "ok   saturation-lowers-membrane"; else fail "saturation-lowers-membrane"; fi
+import json, sys
+a, b = (json.load(open(f)) for f in sys.argv[1:])
+assert a["parameters"]["membraneSaturation"] == 0 and b["parameters"]["membraneSaturation"] == 0.01
+for half in (0, 1):
+    assert 0 < b["terms"]["mem"][half] < 0.99 * a["terms"]["mem"][half], (a["terms"], b["terms"])
+    for k in ("match", "bend", "vol"):
+        assert b["terms"][k][half] == a["terms"][k][half], (k, a["terms"], b["terms"])
+PY
 
 # A mesh (match's deformed.obj of the sphere) against a level set.
 "$VDB_MATCH" "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m" --levels 3..3 --quiet --no-inverse --no-jacobian >/dev/null 2>&1

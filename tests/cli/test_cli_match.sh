@@ -149,13 +149,14 @@ fi
 "$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
-for k in ("surfaceTolerance", "surfaceLevels", "surfaceFromLevel", "coarseMembraneFactor"):
+for k in ("surfaceTolerance", "surfaceLevels", "surfaceFromLevel", "coarseMembraneFactor",
+          "membraneSaturation"):
     r["parameters"].pop(k, None)
 json.dump(r, open(sys.argv[2], "w"))
 PY
 check config-old-report 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old" --config "$SCRATCH/old_report.json" --levels 3..3 --quiet
 count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 and p["surfaceFromLevel"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 and p["surfaceFromLevel"] == 0 and p["membraneSaturation"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
     echo "ok   config-old-report-surface-off"
 else
     fail "config-old-report-surface-off"
@@ -233,6 +234,34 @@ assert (paper["cMatch"], paper["cVol"], paper["cMem"], paper["cBend"], paper["q"
 # the paper has one c_mem; the default stiffens the membrane below the finest level (an addition)
 assert paper["coarseMembraneFactor"] == 1 and default["coarseMembraneFactor"] == 3, (paper, default)
 assert default["cMem"] == 1, default
+# the paper's membrane density; the default saturates it at the first two levels (an addition)
+assert paper["membraneSaturation"] == 0, paper
+assert default["membraneSaturation"] == 0.1 and default["membraneSaturationLevels"] == 2, default
+PY
+check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
+check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
+check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
+check membrane-saturation-levels-integer 1 '' "--membrane-saturation-levels expects an integer" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels 1.5 --quiet
+# 2D keeps the paper's membrane density by default (the saturation is the 3D default).
+check membrane-saturation-2d-default 0 'converged|not converged' '' -- "$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" -o "$SCRATCH/ms2" --levels 4..4 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["membraneSaturation"] == 0 else 1)' "$SCRATCH/ms2/report.json"; then
+    echo "ok   membrane-saturation-2d-default-report"
+else
+    fail "membrane-saturation-2d-default-report"
+fi
+# The saturation is in the deformation's metadata, as the other coefficients.
+check membrane-saturation-run 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/ms" --levels 3..4 --membrane-saturation 0.05 --membrane-saturation-levels 1 --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/ms" <<'PY'; then echo "ok   membrane-saturation-recorded"; else fail "membrane-saturation-recorded"; fi
+import json, sys
+p = json.load(open(sys.argv[1] + "/report.json"))["parameters"]
+assert p["membraneSaturation"] == 0.05 and p["membraneSaturationLevels"] == 1, p
+import pyopenvdb
+grids = pyopenvdb.readAllGridMetadata(sys.argv[1] + "/deformation.vdb")
+m = grids[0]
+assert abs(m["vdbmatch_membrane_saturation"] - 0.05) < 1e-15, dict(m)
+assert m["vdbmatch_membrane_saturation_levels"] == 1, dict(m)
 PY
 check coarse-membrane-factor-range 3 '' 'coarseMembraneFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor -1 --quiet
 check coarse-membrane-factor-number 1 '' "--coarse-membrane-factor expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor x --quiet

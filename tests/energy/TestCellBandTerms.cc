@@ -62,12 +62,12 @@ randomRaw(test::RandomSource& random, RawFields<D>& raw, RawFieldDerivatives<D>&
 
 template <int D>
 void
-checkAgainstPerSimplexCode(unsigned seed)
+checkAgainstPerSimplexCode(unsigned seed, Real memSaturation = 0)
 {
     constexpr int N = CellBandTerms<D>::N;
     test::RandomSource random(seed);
     const Real cMatch = 4.096 * 1e3, cMem = 3.0, cBend = 0.2;
-    int lanesChecked = 0, directOff = 0, inverseOff = 0;
+    int lanesChecked = 0, directOff = 0, inverseOff = 0, saturatedLanes = 0;
     for (int trial = 0; trial < 3000; ++trial) {
         CellBandTerms<D> band, values;
         band.count = 1 + trial % N;
@@ -132,10 +132,10 @@ checkAgainstPerSimplexCode(unsigned seed)
         }
         values = band;
         band.frame();
-        band.template terms<true>(cMatch, cMem, cBend);
+        band.template terms<true>(cMatch, cMem, cBend, true, memSaturation);
         band.adjoint();
         values.frame();
-        values.template terms<false>(cMatch, cMem, cBend);
+        values.template terms<false>(cMatch, cMem, cBend, true, memSaturation);
 
         for (int q = 0; q < band.count; ++q) {
             Lane& L = lane[q];
@@ -155,10 +155,11 @@ checkAgainstPerSimplexCode(unsigned seed)
             Real v[6] = {0, 0, 0, 0, 0, 0};
             if (L.g.eta1 > 0) {
                 e[0] = matchDirect<D, true>(L.g, cMatch, &dg);
-                e[1] = membraneDirect<D, true>(L.k, L.g, cMem, &dg);
+                e[1] = membraneDirect<D, true>(L.k, L.g, cMem, memSaturation, &dg);
                 e[2] = bendingDirect<D, true>(L.k, L.g, cBend, &dg);
                 v[0] = matchDirect<D, false>(L.g, cMatch, nullptr);
-                v[1] = membraneDirect<D, false>(L.k, L.g, cMem, nullptr);
+                v[1] = membraneDirect<D, false>(L.k, L.g, cMem, memSaturation, nullptr);
+                if (v[1] < membraneDirect<D, false>(L.k, L.g, cMem, 0.0, nullptr)) ++saturatedLanes;
                 v[2] = bendingDirect<D, false>(L.k, L.g, cBend, nullptr);
                 ASSERT_TRUE(sameBits(e[0], band.matchDirect[q])) << "match direct " << trial;
                 ASSERT_TRUE(sameBits(e[1], band.memDirect[q])) << "membrane direct " << trial;
@@ -169,10 +170,10 @@ checkAgainstPerSimplexCode(unsigned seed)
             }
             if (L.g.eta2 > 0) {
                 e[3] = matchInverse<D, true>(L.k, L.g, cMatch, &dg);
-                e[4] = membraneInverse<D, true>(L.k, L.g, cMem, &dg);
+                e[4] = membraneInverse<D, true>(L.k, L.g, cMem, memSaturation, &dg);
                 e[5] = bendingInverse<D, true>(L.k, L.g, cBend, &dg);
                 v[3] = matchInverse<D, false>(L.k, L.g, cMatch, nullptr);
-                v[4] = membraneInverse<D, false>(L.k, L.g, cMem, nullptr);
+                v[4] = membraneInverse<D, false>(L.k, L.g, cMem, memSaturation, nullptr);
                 v[5] = bendingInverse<D, false>(L.k, L.g, cBend, nullptr);
                 ASSERT_TRUE(sameBits(e[3], band.matchInverse[q])) << "match inverse " << trial;
                 ASSERT_TRUE(sameBits(e[4], band.memInverse[q])) << "membrane inverse " << trial;
@@ -196,6 +197,10 @@ checkAgainstPerSimplexCode(unsigned seed)
     EXPECT_GT(lanesChecked, 4000);
     EXPECT_GT(directOff, 500); // lanes with one half off were exercised
     EXPECT_GT(inverseOff, 500);
+    // With a saturation, it lowered the membrane density of most lanes (W > 0 off SO(d)).
+    if (memSaturation > 0) {
+        EXPECT_GT(saturatedLanes, lanesChecked / 4);
+    }
 }
 
 } // namespace
@@ -208,4 +213,15 @@ TEST(CellBandTerms, SameBitsAsPerSimplexCode2D)
 TEST(CellBandTerms, SameBitsAsPerSimplexCode3D)
 {
     checkAgainstPerSimplexCode<3>(13);
+}
+
+// The membrane saturation psi_s (math/Saturation.h, an addition to the paper) in both codes.
+TEST(CellBandTerms, SameBitsAsPerSimplexCodeSaturatedMembrane2D)
+{
+    checkAgainstPerSimplexCode<2>(7, 0.1);
+}
+
+TEST(CellBandTerms, SameBitsAsPerSimplexCodeSaturatedMembrane3D)
+{
+    checkAgainstPerSimplexCode<3>(17, 0.1);
 }

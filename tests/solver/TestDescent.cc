@@ -369,6 +369,49 @@ TEST(Descent, CoarseMembraneFactorWeighsTheMembraneBelowTheFinestLevelOnly)
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
 }
 
+TEST(Descent, MembraneSaturationActsAtTheFirstLevelsOnly)
+{
+    // As above: no descent steps, so the runs differ only in the energy of each level.
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    EXPECT_EQ(opts.energy.membraneSaturation, 0.0); // tab:parameters: the paper's W
+    opts.minLevel = 4;
+    opts.maxLevel = 7;
+    opts.descent.maxIterations = 0;
+    Problem<2> problem(opts.energy);
+    const auto run = [&](Real s, int levels) {
+        MultiscaleOptions o = opts;
+        o.energy.membraneSaturation = s;
+        o.membraneSaturationLevels = levels;
+        return MultiscaleDriver<2>(o).run(problem.denseLevels());
+    };
+    const MultiscaleResult<2> paper = run(0, 2), saturated = run(0.001, 2), all = run(0.001, 9);
+    ASSERT_EQ(saturated.reports.size(), 4u);
+    for (std::size_t i = 0; i < 4; ++i) {
+        const EnergyTerms &a = paper.reports[i].terms, &b = saturated.reports[i].terms,
+                          &c = all.reports[i].terms;
+        for (int k = 0; k < 2; ++k) {
+            ASSERT_GT(a.mem[k], 0.0);
+            if (i < 2) // levels 4 and 5: saturated
+                EXPECT_LT(b.mem[k], a.mem[k]) << i;
+            else // levels 6 and 7: the paper's W, bit for bit
+                EXPECT_EQ(b.mem[k], a.mem[k]) << i;
+            EXPECT_LT(c.mem[k], a.mem[k]) << i;
+            EXPECT_EQ(b.match[k], a.match[k]) << i;
+            EXPECT_EQ(b.bend[k], a.bend[k]) << i;
+        }
+    }
+    opts.energy.membraneSaturation = 0.1;
+    EXPECT_EQ(opts.energyAt(5).membraneSaturation, 0.1);
+    EXPECT_EQ(opts.energyAt(6).membraneSaturation, 0.0);
+    opts.membraneSaturationLevels = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.membraneSaturationLevels = 2;
+    opts.energy.membraneSaturation = -0.1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.energy.membraneSaturation = std::numeric_limits<Real>::quiet_NaN();
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, InterrupterStopsTheRun)
 {
     MultiscaleOptions opts = MultiscaleOptions::defaults(2);

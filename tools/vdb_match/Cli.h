@@ -60,8 +60,9 @@ struct EnergyOptions
     EnergyKind kind = EnergyKind::Symmetric;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     double tau = EnergyParameters().tau;
-    int hessianSmoothing = 0; ///< ShapeFieldOptions::hessianSmoothing
-    int threads = 0;          ///< 0: all cores
+    double membraneSaturation = 0; ///< --membrane-saturation (0: the paper's membrane)
+    int hessianSmoothing = 0;      ///< ShapeFieldOptions::hessianSmoothing
+    int threads = 0;               ///< 0: all cores
     bool json = false;
     bool quiet = false;
 

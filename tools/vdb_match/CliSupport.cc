@@ -515,10 +515,15 @@ jsonVec(const openvdb::Vec3d& v)
 Json
 energyParametersJson(const EnergyParameters& p)
 {
-    return Json{{"cMatch", p.cMatch}, {"cMem", p.cMem},
-                {"cBend", p.cBend},   {"cVol", p.cVol},
-                {"q", p.q},           {"theta", p.theta},
-                {"tau", p.tau},       {"sigmaFactor", p.sigmaFactor}};
+    return Json{{"cMatch", p.cMatch},
+                {"cMem", p.cMem},
+                {"cBend", p.cBend},
+                {"cVol", p.cVol},
+                {"q", p.q},
+                {"theta", p.theta},
+                {"tau", p.tau},
+                {"sigmaFactor", p.sigmaFactor},
+                {"membraneSaturation", p.membraneSaturation}};
 }
 
 std::string

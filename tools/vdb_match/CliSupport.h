@@ -253,7 +253,8 @@ using Json = nlohmann::ordered_json;
 /// [x, y, z].
 Json jsonVec(const openvdb::Vec3d& v);
 /// The energy coefficients of tab:parameters: cMatch, cMem, cBend, cVol, q, theta, tau,
-/// sigmaFactor (the "parameters" of report.json and of `energy --json`).
+/// sigmaFactor, and membraneSaturation, an addition (the "parameters" of report.json and of
+/// `energy --json`).
 Json energyParametersJson(const EnergyParameters& p);
 /// The document indented by 2, with a final newline; invalid UTF-8 in strings is replaced.
 std::string dumpJson(const Json& j);

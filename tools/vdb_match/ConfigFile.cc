@@ -23,6 +23,8 @@ configKeys()
         {"cMatch", "--c-match"},
         {"cMem", "--c-mem"},
         {"coarseMembraneFactor", "--coarse-membrane-factor"},
+        {"membraneSaturation", "--membrane-saturation"},
+        {"membraneSaturationLevels", "--membrane-saturation-levels"},
         {"cBend", "--c-bend"},
         {"cVol", "--c-vol"},
         {"q", "--q"},
@@ -128,6 +130,12 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("energyTolerance") &&
         !params.contains("surfaceFromLevel")) {
         settings.push_back({"surfaceFromLevel", "--surface-from-level", "0"});
+    }
+    // ... and one before the membrane saturation (energy coefficients but no
+    // membraneSaturation) used the paper's membrane density at every level.
+    if (doc.contains("parameters") && params.contains("cMem") &&
+        !params.contains("membraneSaturation")) {
+        settings.push_back({"membraneSaturation", "--membrane-saturation", "0"});
     }
     // ... and one before automatic landmarks (no autoLandmarks) had none.
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&

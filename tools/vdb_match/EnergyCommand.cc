@@ -34,6 +34,7 @@ EnergyOptions::parameters(int dim) const
     if (q) p.q = *q;
     if (theta) p.theta = *theta;
     p.tau = tau;
+    p.membraneSaturation = membraneSaturation;
     return p;
 }
 
@@ -121,6 +122,12 @@ energyOptionTable()
              formatNumber(d.tau) + ")" +
              "\npaper: tau, eq:defSi",
          [](O& o, const std::string& v) { o.tau = parseDouble("--tau", v); }},
+        {"--membrane-saturation", "X", "Energy (paper tab:parameters)",
+         "an addition to the paper: take both membrane densities through s log(1 + W/s), >= 0 "
+         "(default 0: the paper's W; match's default acts at its first levels only)",
+         [](O& o, const std::string& v) {
+             o.membraneSaturation = parseDouble("--membrane-saturation", v);
+         }},
         {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
          "[1,2,1]/4 smoothing passes of the distance Hessian, >= 0 (default " +
              std::to_string(d.hessianSmoothing) + ")",

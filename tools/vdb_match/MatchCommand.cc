@@ -65,6 +65,8 @@ struct MatchCliOptions
     std::optional<int> minLevel, maxLevel;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     std::optional<double> coarseMembraneFactor; ///< default per preset (MatchOptions)
+    std::optional<double> membraneSaturation;   ///< default per preset (MatchOptions)
+    std::optional<int> membraneSaturationLevels;
     double tau = EnergyParameters().tau;
     std::string preset = "default"; ///< --preset: "default" or "paper" (MatchOptions::paper)
     EnergyKind kind = EnergyKind::Symmetric;
@@ -243,6 +245,21 @@ matchOptionTable()
              "; --preset paper: 1, the paper's single c_mem)",
          [](O& o, const std::string& v) {
              o.coarseMembraneFactor = parseDouble("--coarse-membrane-factor", v);
+         }},
+        {"--membrane-saturation", "X", "Energy (paper tab:parameters)",
+         "an addition to the paper: at the first --membrane-saturation-levels levels, take both "
+         "membrane densities through s log(1 + W/s), so that a joint's stretch stays at the "
+         "joint; >= 0, 0: the paper's W (default " +
+             formatNumber(DEFAULT_MATCH_MEMBRANE_SATURATION_3D) + " in 3D, " +
+             formatNumber(DEFAULT_MATCH_MEMBRANE_SATURATION_2D) + " in 2D; --preset paper: 0)",
+         [](O& o, const std::string& v) {
+             o.membraneSaturation = parseDouble("--membrane-saturation", v);
+         }},
+        {"--membrane-saturation-levels", "N", "Energy (paper tab:parameters)",
+         "levels, from the first, at which --membrane-saturation acts, >= 0 (default " +
+             std::to_string(DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS) + ")",
+         [](O& o, const std::string& v) {
+             o.membraneSaturationLevels = parseInt("--membrane-saturation-levels", v);
          }},
         {"--c-bend", "X", "Energy (paper tab:parameters)",
          "weight of the bending term (default " + both(p3.cBend, p2.cBend) + ")" +
@@ -711,6 +728,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params["energy"] = toString(opts.multiscale.kind);
     params.update(energyParametersJson(p));
     params["coarseMembraneFactor"] = opts.multiscale.coarseMembraneFactor;
+    params["membraneSaturationLevels"] = opts.multiscale.membraneSaturationLevels;
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
@@ -843,6 +861,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.cMatch) p.cMatch = *o.cMatch;
     if (o.cMem) p.cMem = *o.cMem;
     if (o.coarseMembraneFactor) opts.multiscale.coarseMembraneFactor = *o.coarseMembraneFactor;
+    if (o.membraneSaturation) p.membraneSaturation = *o.membraneSaturation;
+    if (o.membraneSaturationLevels)
+        opts.multiscale.membraneSaturationLevels = *o.membraneSaturationLevels;
     if (o.cBend) p.cBend = *o.cBend;
     if (o.cVol) p.cVol = *o.cVol;
     if (o.q) p.q = *o.q;
@@ -1042,6 +1063,11 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformation->insertMeta("vdbmatch_c_mem", openvdb::DoubleMetadata(p.cMem));
     deformation->insertMeta("vdbmatch_coarse_membrane_factor",
                             openvdb::DoubleMetadata(opts.multiscale.coarseMembraneFactor));
+    deformation->insertMeta("vdbmatch_membrane_saturation",
+                            openvdb::DoubleMetadata(p.membraneSaturation));
+    deformation->insertMeta(
+        "vdbmatch_membrane_saturation_levels",
+        openvdb::Int32Metadata(static_cast<int32_t>(opts.multiscale.membraneSaturationLevels)));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
     deformation->insertMeta("vdbmatch_c_vol", openvdb::DoubleMetadata(p.cVol));
     deformation->insertMeta("vdbmatch_q", openvdb::DoubleMetadata(p.q));

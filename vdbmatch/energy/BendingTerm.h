@@ -22,7 +22,7 @@ bendingDirect(const SimplexKinematics<D>& k, const PointGeometry<D>& g, Real c,
               DensityGradient<D>* grad)
 {
     Mat<D> dTp2;
-    const Real e = projectedDirect<D, Grad>(k, g, g.f2.Tp, g.f1.Tm, c, grad, &dTp2);
+    const Real e = projectedDirect<D, Grad>(k, g, g.f2.Tp, g.f1.Tm, c, 0.0, grad, &dTp2);
     if constexpr (Grad) grad->f2.Tp += dTp2;
     return e;
 }
@@ -34,7 +34,7 @@ bendingInverse(const SimplexKinematics<D>& k, const PointGeometry<D>& g, Real c,
                DensityGradient<D>* grad)
 {
     Mat<D> dTm2;
-    const Real e = projectedInverse<D, Grad>(k, g, g.f1.Tp, g.f2.Tm, c, grad, &dTm2);
+    const Real e = projectedInverse<D, Grad>(k, g, g.f1.Tp, g.f2.Tm, c, 0.0, grad, &dTm2);
     if constexpr (Grad) grad->f2.Tm += dTm2;
     return e;
 }

@@ -38,6 +38,7 @@
 
 #include <vdbmatch/Types.h>
 #include <vdbmatch/energy/CellKinematics.h>
+#include <vdbmatch/math/Saturation.h>
 #include <vdbmatch/math/StoredEnergy.h>
 
 #include <cmath>
@@ -234,11 +235,14 @@ template <int D> struct CellBandTerms
 
     /// The frame of shape 2 from its raw fields (kinematics::makeFrame).
     void frame();
-    /// The six densities with weights c_match sigma^-q, c_mem, c_bend; with Grad, their
-    /// derivatives added to dA, dB and the frame adjoint. Without @a inverseHalves only the
-    /// direct halves (the directional energy eq:Ecomparison, whose eta2 is 0): the inverse
-    /// densities are not set and dB is not touched.
-    template <bool Grad> void terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves = true);
+    /// The six densities with weights c_match sigma^-q, c_mem, c_bend, the membrane ones
+    /// saturated by psi_s with s = @a memSaturation (math/Saturation.h; 0: the paper's); with
+    /// Grad, their derivatives added to dA, dB and the frame adjoint. Without @a inverseHalves
+    /// only the direct halves (the directional energy eq:Ecomparison, whose eta2 is 0): the
+    /// inverse densities are not set and dB is not touched.
+    template <bool Grad>
+    void terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves = true,
+               Real memSaturation = 0);
     /// dy = dE/dy through the frame and the field interpolants (kinematics::frameAdjoint).
     void adjoint();
 };
@@ -398,7 +402,7 @@ CellBandTerms<D>::frame()
 template <int D>
 template <bool Grad>
 inline void
-CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
+CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves, Real memSaturation)
 {
     using namespace lanes;
     using Constants = math::WboundedConstants<D>;
@@ -419,9 +423,9 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
             add(gd, 2.0 * cMatch * eta1[q] * r);
             ad[q] = gd;
         }
-        // projectedDirect(L2, R1) = W(L2 A R1 + n2 (x) n1) for (P2, P1) and (Tp2, Tm1).
-        auto projected = [&](const MatLanes& L2l, const MatLanes& R1l, Real c, Lanes& density,
-                             M<D>& gL2) VDBMATCH_INLINE {
+        // projectedDirect(L2, R1) = psi_s(W(L2 A R1 + n2 (x) n1)) for (P2, P1) and (Tp2, Tm1).
+        auto projected = [&](const MatLanes& L2l, const MatLanes& R1l, Real c, Real sat,
+                             Lanes& density, M<D>& gL2) VDBMATCH_INLINE {
             const M<D> L2 = load<D, N>(L2l, q), R1 = load<D, N>(R1l, q);
             const M<D> AR1 = product<D, LLR>(plain(a), plain(R1));
             const M<D> L2AR1 = product<D, LLR>(plain(L2), plain(AR1));
@@ -434,21 +438,22 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
             const Real w = c * eta1[q];
             M<D> G;
             const Real e = W<D, Grad>(X, wc, off, G);
-            density[q] = w * e;
+            density[q] = w * math::saturated(e, sat);
             if constexpr (Grad) {
+                const Real gw = sat > 0 ? w * math::saturatedSlope(e, sat) : w;
 #pragma GCC unroll 3
                 for (int i = 0; i < D; ++i)
 #pragma GCC unroll 3
                     for (int j = 0; j < D; ++j)
-                        G.a[i][j] = G.a[i][j] * w;
+                        G.a[i][j] = G.a[i][j] * gw;
                 const M<D> LG = product<D, LLL>(transposed(L2), plain(G));
                 add(gA, product<D, RRR>(plain(LG), transposed(R1)));
                 add(gn, apply<D, LLR>(plain(G), vn1));
                 add(gL2, product<D, LLR>(plain(G), transposed(AR1)));
             }
         };
-        projected(P2, P1, cMem, memDirect, gP);
-        projected(Tp2, Tm1, cBend, bendDirect, gTp);
+        projected(P2, P1, cMem, memSaturation, memDirect, gP);
+        projected(Tp2, Tm1, cBend, 0.0, bendDirect, gTp);
         if constexpr (Grad) {
             store<D, N>(gA, dA, q);
             store<D, N>(gn, an, q);
@@ -495,9 +500,9 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
                     x.a[i][l] = k * cofA.a[i][l];
             add(gA, x);
         }
-        // projectedInverse(L1, R2) = W(L1 B R2 + n1 (x) n2) J for (P1, P2) and (Tp1, Tm2).
-        auto projected = [&](const MatLanes& L1l, const MatLanes& R2l, Real c, Lanes& density,
-                             M<D>& gR2) VDBMATCH_INLINE {
+        // projectedInverse(L1, R2) = psi_s(W(L1 B R2 + n1 (x) n2)) J for (P1, P2) and (Tp1, Tm2).
+        auto projected = [&](const MatLanes& L1l, const MatLanes& R2l, Real c, Real sat,
+                             Lanes& density, M<D>& gR2) VDBMATCH_INLINE {
             const M<D> L1 = load<D, N>(L1l, q), R2m = load<D, N>(R2l, q);
             const M<D> L1B = product<D, LLR>(plain(L1), plain(b));
             const M<D> L1BR2 = product<D, LLR>(plain(L1B), plain(R2m));
@@ -508,10 +513,12 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
                 for (int l = 0; l < D; ++l)
                     X.a[i][l] = L1BR2.a[i][l] + vn1.a[i] * vn2.a[l];
             M<D> G;
-            const Real e = W<D, Grad>(X, wc, off, G);
+            const Real we = W<D, Grad>(X, wc, off, G);
+            const Real e = math::saturated(we, sat);
             density[q] = c * eta2[q] * j * e;
             if constexpr (Grad) {
-                const Real s = c * eta2[q] * j;
+                const Real s =
+                    sat > 0 ? c * eta2[q] * j * math::saturatedSlope(we, sat) : c * eta2[q] * j;
 #pragma GCC unroll 3
                 for (int i = 0; i < D; ++i)
 #pragma GCC unroll 3
@@ -532,8 +539,8 @@ CellBandTerms<D>::terms(Real cMatch, Real cMem, Real cBend, bool inverseHalves)
                 add(gR2, product<D, LLL>(transposed(L1B), plain(G)));
             }
         };
-        projected(P1, P2, cMem, memInverse, gP);
-        projected(Tp1, Tm2, cBend, bendInverse, gTm);
+        projected(P1, P2, cMem, memSaturation, memInverse, gP);
+        projected(Tp1, Tm2, cBend, 0.0, bendInverse, gTm);
         if constexpr (Grad) {
             store<D, N>(gA, dA, q);
             store<D, N>(gB, dB, q);

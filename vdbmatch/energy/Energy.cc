@@ -423,7 +423,8 @@ Energy<D>::evaluateBlockBody(std::size_t blockIndex, const NodeVectors<D>& u, En
             fillBandLane<D, Grad>(bt, q, ck, p, f1, raw2, deriv2, inBand1, symmetric, band);
         }
         bt.frame();
-        bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, symmetric);
+        bt.template terms<Grad>(mMatchWeight, mParams.cMem, mParams.cBend, symmetric,
+                                mParams.membraneSaturation);
         if constexpr (Grad) bt.adjoint();
         for (int q = 0; q < bt.count; ++q) {
             if (bt.eta1[q] > 0) {

@@ -50,6 +50,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: coarseMembraneFactor must be finite and in [0, "
                           << MAX_COEFFICIENT << "], got " << coarseMembraneFactor);
+    if (membraneSaturationLevels < 0)
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: membraneSaturationLevels must be >= 0, got "
+                          << membraneSaturationLevels);
     if (!(metric.cgTolerance > 0 && metric.cgTolerance < 1))
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: the metric tolerance must be in (0, 1), got "
@@ -63,6 +67,7 @@ MultiscaleOptions::energyAt(int level) const
 {
     EnergyParameters p = energy;
     if (level < maxLevel) p.cMem *= coarseMembraneFactor;
+    if (level >= minLevel + membraneSaturationLevels) p.membraneSaturation = 0;
     return p;
 }
 

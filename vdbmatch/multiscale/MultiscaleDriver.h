@@ -113,9 +113,16 @@ struct MultiscaleOptions
     /// tangential correspondence (docs/performance.md); a stiffer membrane keeps it near
     /// isometric there, and the finest level, with the paper's weight, can still stretch.
     Real coarseMembraneFactor = 1;
+    /// Levels, from minLevel, at which energy.membraneSaturation acts (>= 0): levels
+    /// l < minLevel + membraneSaturationLevels saturate the membrane densities, the finer ones
+    /// use the paper's W. An addition to the paper (math/Saturation.h): the coarse levels choose
+    /// the tangential correspondence, and the finer ones, with the paper's convex density, fit
+    /// it.
+    int membraneSaturationLevels = 2;
 
     /// The energy coefficients at level l: `energy`, with c_mem scaled by coarseMembraneFactor
-    /// below the finest level.
+    /// below the finest level, and the membrane saturation only at the first
+    /// membraneSaturationLevels levels.
     EnergyParameters energyAt(int level) const;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
