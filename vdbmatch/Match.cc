@@ -345,6 +345,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     const Surface<D> unitTarget = placed(target, placement, "target");
     const int coarsestLevel =
         opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel;
+    // The membrane saturation acts at the first levels of the requested range, coarsestLevel on:
+    // a run that resumes or refines an earlier result (minLevel above it) has fewer left.
+    opts.multiscale.membraneSaturationLevels = std::max(
+        0, coarsestLevel + opts.multiscale.membraneSaturationLevels - opts.multiscale.minLevel);
 
     MatchResult<D> result;
     result.placement = placement;

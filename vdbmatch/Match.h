@@ -103,6 +103,8 @@ constexpr double DEFAULT_MATCH_COARSE_MEMBRANE_FACTOR = 3;
 constexpr double DEFAULT_MATCH_MEMBRANE_SATURATION_3D = 0.1;
 constexpr double DEFAULT_MATCH_MEMBRANE_SATURATION_2D = 0;
 /// Default MultiscaleOptions::membraneSaturationLevels of match() (--membrane-saturation-levels).
+/// match() counts these levels from coarsestLevel, the first of the requested range, so that a run
+/// resumed or refined from an earlier result (--init) saturates no level the earlier run did not.
 constexpr int DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS = 2;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not
 /// be exact (12 instead of 31 CG iterations per solve at level 7, same residual and energy).

@@ -250,6 +250,21 @@ if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"
 else
     fail "membrane-saturation-2d-default-report"
 fi
+# Refining an earlier result (--init) saturates no level that run did not: the first two levels
+# of --levels are counted, not the first level this run starts at. Level 5 of 3..5, started from
+# a 3..4 result, uses the paper's density: its energies equal those of --membrane-saturation 0.
+check membrane-saturation-init-base 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/msi" --levels 3..4 --quiet
+check membrane-saturation-init 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/msi5" --levels 3..5 --init "$SCRATCH/msi/deformation.vdb" --quiet
+check membrane-saturation-init-paper 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/msi5p" --levels 3..5 --init "$SCRATCH/msi/deformation.vdb" --membrane-saturation 0 --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/msi5" "$SCRATCH/msi5p" <<'PY'; then echo "ok   membrane-saturation-init-unsaturated"; else fail "membrane-saturation-init-unsaturated"; fi
+import json, sys
+a, b = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+assert [l["level"] for l in a["levels"]] == [5], a["levels"]
+assert a["parameters"]["membraneSaturation"] == 0.1, a["parameters"]
+assert a["levels"][0]["initialEnergy"] == b["levels"][0]["initialEnergy"], (a["levels"][0], b["levels"][0])
+assert a["levels"][0]["energy"] == b["levels"][0]["energy"], (a["levels"][0], b["levels"][0])
+PY
 # The saturation is in the deformation's metadata, as the other coefficients.
 check membrane-saturation-run 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/ms" --levels 3..4 --membrane-saturation 0.05 --membrane-saturation-levels 1 --quiet
 count=$((count + 1))
