@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Point and mesh peers on the accuracy pairs (issue: correspondence): Bayesian Coherent Point
-# Drift (BCPD, github.com/ohirose/bcpd) and the AMM non-rigid registration of Yao et al.
-# (github.com/yaoyx689/AMM_NRR), each run as its users would, against the same known maps g as
-# bench/bench_accuracy.sh. Neither is packaged: build them yourself from their public sources
-# and give their binaries' paths; a peer without a path is skipped with a message. Not in CI.
+# Point, mesh and image peers on the accuracy pairs (issue: correspondence): Bayesian Coherent
+# Point Drift (BCPD, github.com/ohirose/bcpd), the AMM non-rigid registration of Yao et al.
+# (github.com/yaoyx689/AMM_NRR) and ANTs SyN (github.com/ANTsX/ANTs) on the shapes' signed
+# distances, each run as its users would, against the same known maps g as
+# bench/bench_accuracy.sh. None is packaged in Debian 12: build them yourself from their public
+# sources and give their binaries' paths; a peer without a path is skipped with a message. Not
+# in CI.
 # How they were built for docs/results.md (2026-11-26, Debian 12; their licences are theirs:
 # AMM_NRR's README restricts it to research use):
 #   apt-get install -y libopenblas-dev libopenmesh-dev   # then reset the BLAS alternative if
@@ -11,13 +13,22 @@
 #   BCPD (ohirose/bcpd daec198): make in the repository root -> ./bcpd (gcc -O3 -fopenmp, OpenBLAS)
 #   AMM_NRR (yaoyx689/AMM_NRR 3621366): cmake -DCMAKE_BUILD_TYPE=Release .. && cmake --build .
 #       -> build/AMM_NRR (bundled nanoflann, system Eigen and OpenMesh)
+#   ANTs (ANTsX/ANTs v2.3.5, 2026-11-27; the last release for ITK 5.2): against Debian's ITK
+#       (apt-get install -y libinsighttoolkit5-dev), cmake -G Ninja -DCMAKE_BUILD_TYPE=Release
+#       -DANTS_SUPERBUILD=OFF -DUSE_SYSTEM_ITK=ON -DITK_DIR=/usr/lib/cmake/ITK-5.2
+#       -DBUILD_TESTING=OFF -DBUILD_SHARED_LIBS=OFF -DUSE_VTK=OFF
+#       -DCMAKE_CXX_FLAGS=-I<ITKGenericLabelInterpolator>/include SRC (the headers of
+#       InsightSoftwareConsortium/ITKGenericLabelInterpolator 89da930, an ITK module Debian lacks),
+#       then cmake --build . --target antsRegistration antsApplyTransformsToPoints (22 min, 2 cores)
 # Set OMP_NUM_THREADS (and OPENBLAS_NUM_THREADS for BCPD) to compare at equal cores. AMM_NRR exits
 # 0 even when it cannot write its result; the score step fails on the missing file instead.
 #
-# Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--out DIR]
+# Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--syn PATH]
+#                               [--out DIR]
 #   --pairs  names, or a set: all (default; make_pairs.py --list) or speed
 #   --bcpd   the bcpd binary (built with its makefile; needs OpenBLAS/LAPACK)
 #   --amm    the AMM_NRR binary (CMake; needs OpenMesh: Debian libopenmesh-dev); 3D only
+#   --syn    ANTs' antsRegistration binary; antsApplyTransformsToPoints must be next to it
 #   --out    keep pairs and outputs in DIR (pairs are reused as bench_accuracy.sh does)
 #
 # Each peer maps the source to the target sampled independently of it (make_pairs.py
@@ -32,6 +43,17 @@
 #         Y = source points, the output y.txt = phi(Y) in the source's order, world units.
 #   AMM   its defaults (radius 5, alpha 100, beta 10), source.obj -> target_resampled.obj; the
 #         output mesh keeps the source's vertex order.
+#   SyN   ANTs' antsRegistrationSyN.sh as its users run it: its three stages (rigid and affine
+#         with MI, then SyN[0.1,3,0] with CC radius 4; its iterations, shrink factors and
+#         smoothing) on the signed distances of the source (fixed) and of target_resampled
+#         (moving), sampled by bench/accuracy/sdf_images.py on the nodes of vdb_match's level 7
+#         in 3D, 9 in 2D (the resolution of elastix in compare_elastix.sh), without the script's
+#         centre-of-mass initial transform (the shapes share the placement, and on signed
+#         distances that centre moves the wrong way). antsApplyTransformsToPoints maps the
+#         source's vertices by the forward transforms (Warp, then the affine): phi(v) = T(v).
+#         Set ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS to choose its cores. (MeanSquares instead of
+#         CC, tried once: four times faster but far from converged on the signed distances, the
+#         swirled creature 16.3e-3 against 7.7e-3.)
 # Prints one row per pair and peer: err mean, err p95, wall seconds, peak memory (GNU time).
 set -euo pipefail
 
@@ -41,13 +63,16 @@ usage() { sed -n '/^# Usage:/,/^#   --out/p' "$0" | sed 's/^# \{0,1\}//'; }
 PAIRS=all
 BCPD=
 AMM=
+SYN=
 OUT=
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
-    --pairs|--bcpd|--amm|--out)
+    --pairs|--bcpd|--amm|--syn|--out)
       [ $# -ge 2 ] || die "$1 needs a value"
-      case "$1" in --pairs) PAIRS=$2 ;; --bcpd) BCPD=$2 ;; --amm) AMM=$2 ;; --out) OUT=$2 ;; esac
+      case "$1" in
+        --pairs) PAIRS=$2 ;; --bcpd) BCPD=$2 ;; --amm) AMM=$2 ;; --syn) SYN=$2 ;; --out) OUT=$2 ;;
+      esac
       shift 2 ;;
     *) usage >&2; die "unknown argument $1" ;;
   esac
@@ -60,7 +85,14 @@ MAKE_PAIRS=$ROOT/bench/accuracy/make_pairs.py
 [ -x /usr/bin/time ] || die "needs GNU time (apt-get install -y time)"
 [ -z "$BCPD" ] || [ -x "$BCPD" ] || die "--bcpd $BCPD is not an executable"
 [ -z "$AMM" ] || [ -x "$AMM" ] || die "--amm $AMM is not an executable"
-[ -n "$BCPD$AMM" ] || echo "compare_peers.sh: neither --bcpd nor --amm given: every peer is skipped"
+if [ -n "$SYN" ]; then
+  [ -x "$SYN" ] || die "--syn $SYN is not an executable"
+  SYN_POINTS=$(dirname "$SYN")/antsApplyTransformsToPoints
+  [ -x "$SYN_POINTS" ] || die "--syn: $SYN_POINTS not found (build that target of ANTs too)"
+  "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
+    die "--syn needs numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
+fi
+[ -n "$BCPD$AMM$SYN" ] || echo "compare_peers.sh: none of --bcpd, --amm, --syn given: every peer is skipped"
 
 source "$ROOT/bench/accuracy/ensure_pairs.sh"
 output_dir peers
@@ -107,7 +139,7 @@ both = np.vstack([source, tgt])
 scale = 0.6 / (both.max(axis=0) - both.min(axis=0)).max()  # vdb_match's placement, margin 0.2
 err = np.linalg.norm(phi - truth, axis=1) * scale
 motion = pair["motion"]["meanWorld"] * scale
-print("%-21s %-5s %9.2e %9.2e %9.2e %8.1f %8.0f" % (pair["name"], peer, err.mean(),
+print("%-21s %-6s %9.2e %9.2e %9.2e %8.1f %8.0f" % (pair["name"], peer, err.mean(),
       np.percentile(err, 95), motion, float(wall), int(rss) / 1024))
 new = not os.path.exists(tsv)
 with open(tsv, "a") as f:
@@ -118,9 +150,45 @@ with open(tsv, "a") as f:
 PY
 }
 
+# syn_run DIM RUNDIR: antsRegistrationSyN.sh's three stages on RUNDIR/sdf (fixed = the source's
+# signed distance, moving = the target's), then the source's vertices mapped by the forward
+# transforms into RUNDIR/syn_phi.xyz (world units). Time and peak memory of both steps (the
+# signed-distance images are not counted, as for elastix) in RUNDIR/syn.time.
+syn_run() {
+  local dim=$1 rd=$2 f m
+  f=$rd/sdf/source_sdf.mhd
+  m=$rd/sdf/target_sdf.mhd
+  /usr/bin/time -f '%e %M' -o "$rd/syn.reg.time" "$SYN" --dimensionality "$dim" --float 1 \
+    --collapse-output-transforms 1 --output "$rd/syn_" --interpolation Linear \
+    --use-histogram-matching 0 --winsorize-image-intensities "[0.005,0.995]" \
+    --transform "Rigid[0.1]" --metric "MI[$f,$m,1,32,Regular,0.25]" \
+    --convergence "[1000x500x250x100,1e-6,10]" --shrink-factors 8x4x2x1 --smoothing-sigmas 3x2x1x0vox \
+    --transform "Affine[0.1]" --metric "MI[$f,$m,1,32,Regular,0.25]" \
+    --convergence "[1000x500x250x100,1e-6,10]" --shrink-factors 8x4x2x1 --smoothing-sigmas 3x2x1x0vox \
+    --transform "SyN[0.1,3,0]" --metric "CC[$f,$m,1,4]" \
+    --convergence "[100x70x50x20,1e-6,10]" --shrink-factors 8x4x2x1 --smoothing-sigmas 3x2x1x0vox \
+    >"$rd/syn.log" 2>&1 || return 1
+  /usr/bin/time -f '%e %M' -o "$rd/syn.map.time" "$SYN_POINTS" --dimensionality "$dim" \
+    --input "$rd/sdf/source_points.csv" --output "$rd/syn_points.csv" \
+    --transform "$rd/syn_1Warp.nii.gz" --transform "$rd/syn_0GenericAffine.mat" \
+    >>"$rd/syn.log" 2>&1 || return 1
+  "$PYTHON" - "$rd" "$dim" <<'PY'
+import json, sys
+import numpy as np
+rd, dim = sys.argv[1], int(sys.argv[2])
+place = json.load(open(f"{rd}/sdf/placement.json"))
+unit = np.loadtxt(f"{rd}/syn_points.csv", delimiter=",", skiprows=1, ndmin=2)[:, :dim]
+np.savetxt(f"{rd}/syn_phi.xyz", unit / place["scale"] + np.array(place["origin"]), fmt="%.9g")
+# the wall times add up, the peak memory is the larger of the two steps
+reg, pts = (open(f"{rd}/syn.{k}.time").read().split()[-2:] for k in ("reg", "map"))
+open(f"{rd}/syn.time", "w").write(
+    "%.2f %d\n" % (float(reg[0]) + float(pts[0]), max(int(reg[1]), int(pts[1]))))
+PY
+}
+
 rm -f "$OUT/peers.tsv"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-printf '%-21s %-5s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
+printf '%-21s %-6s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
 for p in "${PAIR_LIST[@]}"; do
   pd=$OUT/pairs/$p
   dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
@@ -146,8 +214,17 @@ for p in "${PAIR_LIST[@]}"; do
       read -r wall rss <"$rd/amm.time"
       score "$pd" "$target" "$rd/amm_res.obj" AMM "$wall" "$rss"
     else
-      printf '%-21s %-5s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
+      printf '%-21s %-6s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
     fi
+  fi
+  if [ -n "$SYN" ]; then
+    level=7
+    [ "$dim" = 3 ] || level=9
+    "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$pd" --level "$level" --out "$rd/sdf" \
+      || die "sdf_images.py failed on $p"
+    syn_run "$dim" "$rd" || { tail -n 5 "$rd/syn.log" >&2; die "SyN failed on $p"; }
+    read -r wall rss <"$rd/syn.time"
+    score "$pd" "$target" "$rd/syn_phi.xyz" SyN "$wall" "$rss"
   fi
 done
 [ $KEEP = 0 ] || echo "results: $OUT/peers.tsv"
