@@ -179,6 +179,18 @@ rd, dim = sys.argv[1], int(sys.argv[2])
 place = json.load(open(f"{rd}/sdf/placement.json"))
 unit = np.loadtxt(f"{rd}/syn_points.csv", delimiter=",", skiprows=1, ndmin=2)[:, :dim]
 np.savetxt(f"{rd}/syn_phi.xyz", unit / place["scale"] + np.array(place["origin"]), fmt="%.9g")
+# how closely T fits the target: |d2(T(v))| sampled (multi)linearly in the target's image
+header = dict(l.split(" = ", 1) for l in open(f"{rd}/sdf/target_sdf.mhd").read().splitlines())
+n, h = int(header["DimSize"].split()[0]), float(header["ElementSpacing"].split()[0])
+d2 = np.fromfile(f"{rd}/sdf/target_sdf.raw", np.float32).reshape((n,) * dim).transpose()
+x = np.clip(unit / h, 0, n - 1 - 1e-9)
+i = np.floor(x).astype(int)
+f = x - i
+res = 0.0
+for corner in np.ndindex(*(2,) * dim):
+    w = np.prod([f[:, k] if c else 1 - f[:, k] for k, c in enumerate(corner)], axis=0)
+    res = res + w * d2[tuple(i[:, k] + c for k, c in enumerate(corner))]
+open(f"{rd}/syn_residual.txt", "w").write("%.6g %.6g\n" % (np.abs(res).mean(), h))
 # the wall times add up, the peak memory is the larger of the two steps
 reg, pts = (open(f"{rd}/syn.{k}.time").read().split()[-2:] for k in ("reg", "map"))
 open(f"{rd}/syn.time", "w").write(
@@ -225,6 +237,8 @@ for p in "${PAIR_LIST[@]}"; do
     syn_run "$dim" "$rd" || { tail -n 5 "$rd/syn.log" >&2; die "SyN failed on $p"; }
     read -r wall rss <"$rd/syn.time"
     score "$pd" "$target" "$rd/syn_phi.xyz" SyN "$wall" "$rss"
+    read -r res h <"$rd/syn_residual.txt"
+    printf '%-21s %-6s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" SyN "$res" "$h"
   fi
 done
 [ $KEEP = 0 ] || echo "results: $OUT/peers.tsv"
