@@ -165,41 +165,21 @@ cat >"$WORK/sdf.py" <<'PY'
 # transformix point file of the source vertices.
 import json, sys, time
 import numpy as np
-import pyopenvdb as vdb
+
+sys.path.insert(0, "bench/accuracy")
+from sdf_images import read_obj, sdf_mesh  # noqa: E402  (the same volumes as compare_peers.sh --syn)
 
 pair, work, level, band = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
 placement = json.load(open(f"{work}/vdb_match/report.json"))["placement"]
 origin, scale = np.array(placement["worldOrigin"], float), float(placement["scale"])
 n = 2 ** level + 1
 h = 2.0 ** -level  # voxel size: the volumes live in the unit box, unit-box lengths
-halfWidth = float(np.ceil(band * 2 ** level)) + 2.0
 
-
-def readObj(path):
-    pts, tris = [], []
-    for line in open(path):
-        t = line.split("#")[0].split()
-        if not t:
-            continue
-        if t[0] == "v":
-            pts.append([float(x) for x in t[1:4]])
-        elif t[0] == "f":
-            idx = [int(x.split("/")[0]) for x in t[1:]]
-            idx = [i - 1 if i > 0 else len(pts) + i for i in idx]
-            for k in range(1, len(idx) - 1):  # fan, as vdb_match
-                tris.append([idx[0], idx[k], idx[k + 1]])
-    return np.array(pts, float), np.array(tris, np.int32)
-
-
-xform = vdb.createLinearTransform(h)  # voxel ijk = unit point ijk * h
 t0 = time.time()
 for name in ("source", "target"):
-    pts, tris = readObj(f"{pair}/{name}.obj")
+    pts, tris = read_obj(f"{pair}/{name}.obj")
     pts = scale * (pts - origin)  # unit box
-    grid = vdb.FloatGrid.createLevelSetFromPolygons(pts.astype(np.float32), triangles=tris,
-                                                    transform=xform, halfWidth=halfWidth)
-    a = np.empty((n, n, n), np.float32)  # a[i, j, k] = d((i, j, k) * h), unit-box lengths
-    grid.copyToArray(a, ijk=(0, 0, 0))
+    a = sdf_mesh(pts, tris, n, h, band)  # a[i, j, k] = d((i, j, k) * h), unit-box lengths
     # MetaImage: x fastest, so write the (k, j, i) layout in C order
     np.ascontiguousarray(a.transpose(2, 1, 0)).tofile(f"{work}/{name}_sdf.raw")
     with open(f"{work}/{name}_sdf.mhd", "w") as f:
