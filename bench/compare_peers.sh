@@ -52,8 +52,8 @@
 #         distances that centre moves the wrong way). antsApplyTransformsToPoints maps the
 #         source's vertices by the forward transforms (Warp, then the affine): phi(v) = T(v).
 #         Set ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS to choose its cores. (MeanSquares instead of
-#         CC, tried once: four times faster but far from converged on the signed distances, the
-#         swirled creature 16.3e-3 against 7.7e-3.)
+#         CC, tried once: 45 s instead of 13 minutes on the swirled creature, but far from
+#         converged on the signed distances: error 16.3e-3 against 7.7e-3.)
 # Prints one row per pair and peer: err mean, err p95, wall seconds, peak memory (GNU time).
 set -euo pipefail
 
