@@ -261,6 +261,9 @@ cat >"$WORK/evaluate.py" <<'PY'
 import json, re, sys
 import numpy as np
 
+sys.path.insert(0, "bench/accuracy")
+from sdf_images import sample  # noqa: E402
+
 pair, work, level, sdfSeconds = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
 tsv = sys.argv[5] if len(sys.argv) > 5 else ""
 report = json.load(open(f"{work}/vdb_match/report.json"))
@@ -284,17 +287,7 @@ d2 = np.fromfile(f"{work}/target_sdf.raw", np.float32).reshape(n, n, n).transpos
 
 
 def trilinear(a, unit):
-    x = np.clip(unit / h, 0.0, n - 1 - 1e-9)
-    i = np.floor(x).astype(int)
-    f = x - i
-    v = 0.0
-    for dx in (0, 1):
-        for dy in (0, 1):
-            for dz in (0, 1):
-                w = (f[:, 0] if dx else 1 - f[:, 0]) * (f[:, 1] if dy else 1 - f[:, 1]) * \
-                    (f[:, 2] if dz else 1 - f[:, 2])
-                v = v + w * a[i[:, 0] + dx, i[:, 1] + dy, i[:, 2] + dz]
-    return v
+    return sample(a, h, unit)
 
 
 def toUnit(world):

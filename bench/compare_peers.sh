@@ -172,24 +172,20 @@ syn_run() {
     --input "$rd/sdf/source_points.csv" --output "$rd/syn_points.csv" \
     --transform "$rd/syn_1Warp.nii.gz" --transform "$rd/syn_0GenericAffine.mat" \
     >>"$rd/syn.log" 2>&1 || return 1
-  "$PYTHON" - "$rd" "$dim" <<'PY'
-import json, sys
+  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$rd" "$dim" <<'PY'
+import json, os, sys
 import numpy as np
 rd, dim = sys.argv[1], int(sys.argv[2])
 place = json.load(open(f"{rd}/sdf/placement.json"))
 unit = np.loadtxt(f"{rd}/syn_points.csv", delimiter=",", skiprows=1, ndmin=2)[:, :dim]
 np.savetxt(f"{rd}/syn_phi.xyz", unit / place["scale"] + np.array(place["origin"]), fmt="%.9g")
-# how closely T fits the target: |d2(T(v))| sampled (multi)linearly in the target's image
+# how closely T fits the target: |d2(T(v))| sampled in the target's image
+sys.path.insert(0, os.environ["ACCURACY_DIR"])
+from sdf_images import sample  # noqa: E402  (bench/accuracy/sdf_images.py)
 header = dict(l.split(" = ", 1) for l in open(f"{rd}/sdf/target_sdf.mhd").read().splitlines())
 n, h = int(header["DimSize"].split()[0]), float(header["ElementSpacing"].split()[0])
 d2 = np.fromfile(f"{rd}/sdf/target_sdf.raw", np.float32).reshape((n,) * dim).transpose()
-x = np.clip(unit / h, 0, n - 1 - 1e-9)
-i = np.floor(x).astype(int)
-f = x - i
-res = 0.0
-for corner in np.ndindex(*(2,) * dim):
-    w = np.prod([f[:, k] if c else 1 - f[:, k] for k, c in enumerate(corner)], axis=0)
-    res = res + w * d2[tuple(i[:, k] + c for k, c in enumerate(corner))]
+res = sample(d2, h, unit)
 open(f"{rd}/syn_residual.txt", "w").write("%.6g %.6g\n" % (np.abs(res).mean(), h))
 # the wall times add up, the peak memory is the larger of the two steps
 reg, pts = (open(f"{rd}/syn.{k}.time").read().split()[-2:] for k in ("reg", "map"))

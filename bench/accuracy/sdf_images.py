@@ -112,6 +112,20 @@ def sdf_mesh(pts, tris, n, h, band):
     return a
 
 
+def sample(a, h, unit):
+    """Multilinear interpolation of a[i, j(, k)], the values at the nodes (i, j(, k)) h, at the
+    points unit (m, d); points outside the image are clamped to it."""
+    n, dim = a.shape[0], a.ndim
+    x = np.clip(unit / h, 0.0, n - 1 - 1e-9)
+    i = np.floor(x).astype(int)
+    f = x - i
+    value = 0.0
+    for corner in np.ndindex(*(2,) * dim):
+        w = np.prod([f[:, k] if c else 1 - f[:, k] for k, c in enumerate(corner)], axis=0)
+        value = value + w * a[tuple(i[:, k] + c for k, c in enumerate(corner))]
+    return value
+
+
 def write_mhd(path, a, h):
     """MetaImage, x fastest: a[i, j(, k)] is written in (k, j, i) C order."""
     dim = a.ndim

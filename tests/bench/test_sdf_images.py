@@ -100,3 +100,19 @@ def test_3d_cube_distances(tmp_path):
     assert np.abs(a[near] - exact[near]).max() < 1e-3 * h
     b, _ = read_mhd(str(tmp_path / "out" / "target_sdf.mhd"))
     assert (b < 0).sum() < (a < 0).sum()  # the smaller cube
+
+
+def test_sample_is_multilinear():
+    sys.path.insert(0, os.path.dirname(SCRIPT))
+    from sdf_images import sample
+
+    h = 0.25
+    ii = np.stack(np.meshgrid(*[np.arange(5)] * 3, indexing="ij"), axis=-1) * h
+    a = 0.3 + 2.0 * ii[..., 0] - ii[..., 1] + 0.5 * ii[..., 2]  # linear: reproduced exactly
+    rng = np.random.default_rng(1)
+    p = rng.uniform(0, 1, (200, 3))
+    assert sample(a, h, p) == pytest.approx(0.3 + 2.0 * p[:, 0] - p[:, 1] + 0.5 * p[:, 2])
+    nodes = rng.integers(0, 5, (50, 3))
+    assert sample(a, h, nodes * h) == pytest.approx(a[tuple(nodes.T)])  # values at the nodes
+    b = a[:, :, 0] * a[:, :, 0]  # 2D, bilinear: the cell centre is the mean of its corners
+    assert sample(b, h, np.array([[0.125, 0.375]]))[0] == pytest.approx(b[0:2, 1:3].mean())
