@@ -82,31 +82,11 @@ fi
 [ -x "$VDB_MATCH" ] || { echo "compare_elastix.sh: $VDB_MATCH is not executable (build first: bash tools/build.sh)" >&2; exit 1; }
 
 # ---- elastix parameters (B-spline registration of the two SDF volumes) ------------------------
-# Everything elastix is told is here; the parameter file below is written from these values, and
-# each can be overridden from the environment (e.g. ELASTIX_ITERATIONS=500). Choices, measured on a
-# sphere -> anisotropically stretched ellipsoid pair at levels 5 and 6:
-# - final control-point spacing 4 voxels (4h), reached from 32 voxels by halving per resolution;
-# - the bending penalty is needed: with weight 0 the metric keeps decreasing but at the two finest
-#   resolutions the points drift along the level sets (mean |T(v) - g(v)| 0.23 of the box against
-#   0.014 after the second resolution) and det DT < 0 on thousands of voxels; 1e-6 still folds a
-#   few voxels, 3e-6 does not (it is a weight in unit-box lengths: the same for every pair);
-# - 250 iterations per resolution: 500 lower the mean residual by a tenth (7.2e-4 -> 6.5e-4 at
-#   level 6) at twice the time, with the same ground-truth error;
-# - ASGD with automatic step sizes (elastix's default optimizer for B-splines), first-order
-#   interpolation of the moving image in the metric (the SDF is smooth; order 3 fared no better).
-ELASTIX_PYRAMID=${ELASTIX_PYRAMID:-"8 4 2 1"}              # resolutions: downsampling factor of each (recursive pyramid)
-ELASTIX_GRID_SPACING=${ELASTIX_GRID_SPACING:-4}            # final B-spline control-point spacing, voxels of level L
-ELASTIX_GRID_SCHEDULE=${ELASTIX_GRID_SCHEDULE:-"8 4 2 1"}  # grid spacing multiplier per resolution
-ELASTIX_ITERATIONS=${ELASTIX_ITERATIONS:-250}              # ASGD iterations per resolution
-ELASTIX_SAMPLES=${ELASTIX_SAMPLES:-4096}                   # random samples per iteration
-ELASTIX_SAMPLER=${ELASTIX_SAMPLER:-RandomCoordinate}       # new samples every iteration
-ELASTIX_BENDING=${ELASTIX_BENDING:-3e-6}                   # weight of TransformBendingEnergyPenalty (unit-box lengths); 0: none
+# bench/accuracy/elastix.sh holds them (ELASTIX_* variables, which the environment may override),
+# the same as compare_peers.sh --elastix uses.
+source bench/accuracy/elastix.sh
+elastix_check || exit 1
 SDF_BAND=${SDF_BAND:-0.3}                                  # SDF exact up to this distance (unit box), clamped beyond
-read -r -a _pyr <<<"$ELASTIX_PYRAMID"
-read -r -a _sch <<<"$ELASTIX_GRID_SCHEDULE"
-ELASTIX_RESOLUTIONS=${#_pyr[@]}
-[ "${#_sch[@]}" -eq "$ELASTIX_RESOLUTIONS" ] ||
-  { echo "compare_elastix.sh: ELASTIX_PYRAMID and ELASTIX_GRID_SCHEDULE need one value per resolution" >&2; exit 1; }
 
 PYTHON=python3
 [ -x /usr/bin/python3 ] && PYTHON=/usr/bin/python3          # the system python has numpy and pyopenvdb
@@ -147,9 +127,7 @@ fi
 echo "pair: $PAIR$PAIR_INFO"
 echo "resolution: level $LEVEL, h = 2^-$LEVEL, SDF volumes ${N}^3 on the vdb_match placement; threads $THREADS"
 echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -1)) --levels 4..$LEVEL --threads $THREADS --quiet $VDBMATCH_ARGS"
-echo "elastix $(elastix --version 2>&1 | head -1 | sed "s/^elastix version: //"): B-spline, $ELASTIX_RESOLUTIONS resolutions (recursive pyramid $ELASTIX_PYRAMID)," \
-     "final grid spacing $ELASTIX_GRID_SPACING voxels (schedule $ELASTIX_GRID_SCHEDULE)," \
-     "AdvancedMeanSquares + $ELASTIX_BENDING x TransformBendingEnergyPenalty, ASGD $ELASTIX_ITERATIONS iterations/resolution, $ELASTIX_SAMPLER sampler $ELASTIX_SAMPLES samples; SDF band +-$SDF_BAND"
+echo "elastix $(elastix --version 2>&1 | head -1 | sed "s/^elastix version: //"): $(elastix_summary); SDF band +-$SDF_BAND"
 
 # ---- 1. vdb_match ------------------------------------------------------------------------------
 # shellcheck disable=SC2086
@@ -197,7 +175,7 @@ PY
 SDF_SECONDS=$("$PYTHON" "$WORK/sdf.py" "$PAIR" "$WORK" "$LEVEL" "$SDF_BAND")
 
 # ---- 3. elastix and transformix ----------------------------------------------------------------
-cat >"$WORK/elastix/parameters.txt" <<EOF
+elastix_parameters 3 "$WORK/elastix/parameters.txt"
 // written by bench/compare_elastix.sh: B-spline registration of two signed-distance volumes
 (FixedInternalImagePixelType "float")
 (MovingInternalImagePixelType "float")

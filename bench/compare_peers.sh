@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Point, mesh and image peers on the accuracy pairs (issue: correspondence): Bayesian Coherent
 # Point Drift (BCPD, github.com/ohirose/bcpd), the AMM non-rigid registration of Yao et al.
-# (github.com/yaoyx689/AMM_NRR) and ANTs SyN (github.com/ANTsX/ANTs) on the shapes' signed
-# distances, each run as its users would, against the same known maps g as
-# bench/bench_accuracy.sh. None is packaged in Debian 12: build them yourself from their public
-# sources and give their binaries' paths; a peer without a path is skipped with a message. Not
-# in CI.
+# (github.com/yaoyx689/AMM_NRR), and ANTs SyN (github.com/ANTsX/ANTs) and elastix on the shapes'
+# signed distances, each run as its users would, against the same known maps g as
+# bench/bench_accuracy.sh. Only elastix is packaged in Debian 12 (apt-get install -y elastix);
+# build the others yourself from their public sources. Give each peer's binary path; a peer
+# without a path is skipped with a message. Not in CI.
 # How they were built for docs/results.md (2026-11-26, Debian 12; their licences are theirs:
 # AMM_NRR's README restricts it to research use):
 #   apt-get install -y libopenblas-dev libopenmesh-dev   # then reset the BLAS alternative if
@@ -24,11 +24,12 @@
 # 0 even when it cannot write its result; the score step fails on the missing file instead.
 #
 # Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--syn PATH]
-#                               [--out DIR]
+#                               [--elastix PATH] [--out DIR]
 #   --pairs  names, or a set: all (default; make_pairs.py --list) or speed
 #   --bcpd   the bcpd binary (built with its makefile; needs OpenBLAS/LAPACK)
 #   --amm    the AMM_NRR binary (CMake; needs OpenMesh: Debian libopenmesh-dev); 3D only
 #   --syn    ANTs' antsRegistration binary; antsApplyTransformsToPoints must be next to it
+#   --elastix the elastix binary (Debian: /usr/bin/elastix); transformix must be next to it
 #   --out    keep pairs and outputs in DIR (pairs are reused as bench_accuracy.sh does)
 #
 # Each peer maps the source to the target sampled independently of it (make_pairs.py
@@ -54,7 +55,13 @@
 #         Set ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS to choose its cores. (MeanSquares instead of
 #         CC, tried once: 45 s instead of 13 minutes on the swirled creature, but far from
 #         converged on the signed distances: error 16.3e-3 against 7.7e-3.)
-# Prints one row per pair and peer: err mean, err p95, wall seconds, peak memory (GNU time).
+#   elastix  B-spline registration of the same signed-distance images as SyN (fixed = source,
+#         moving = target), with the parameters of bench/accuracy/elastix.sh, which
+#         bench/compare_elastix.sh uses too (its side-by-side speed comparison, 3D); transformix
+#         -def maps the source's vertices: phi(v) = T(v). Threads: -threads
+#         $ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS when set, else elastix's default (all cores).
+# Prints one row per pair and peer: err mean, err p95, wall seconds, peak memory (GNU time); for
+# SyN and elastix also their residual, mean |d2(phi(v))| sampled in the target's image.
 set -euo pipefail
 
 die() { echo "compare_peers.sh: $*" >&2; exit 1; }
@@ -64,14 +71,16 @@ PAIRS=all
 BCPD=
 AMM=
 SYN=
+ELASTIX=
 OUT=
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
-    --pairs|--bcpd|--amm|--syn|--out)
+    --pairs|--bcpd|--amm|--syn|--elastix|--out)
       [ $# -ge 2 ] || die "$1 needs a value"
       case "$1" in
-        --pairs) PAIRS=$2 ;; --bcpd) BCPD=$2 ;; --amm) AMM=$2 ;; --syn) SYN=$2 ;; --out) OUT=$2 ;;
+        --pairs) PAIRS=$2 ;; --bcpd) BCPD=$2 ;; --amm) AMM=$2 ;; --syn) SYN=$2 ;;
+        --elastix) ELASTIX=$2 ;; --out) OUT=$2 ;;
       esac
       shift 2 ;;
     *) usage >&2; die "unknown argument $1" ;;
@@ -92,7 +101,17 @@ if [ -n "$SYN" ]; then
   "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
     die "--syn needs numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
 fi
-[ -n "$BCPD$AMM$SYN" ] || echo "compare_peers.sh: none of --bcpd, --amm, --syn given: every peer is skipped"
+if [ -n "$ELASTIX" ]; then
+  [ -x "$ELASTIX" ] || die "--elastix $ELASTIX is not an executable"
+  TRANSFORMIX=$(dirname "$ELASTIX")/transformix
+  [ -x "$TRANSFORMIX" ] || die "--elastix: $TRANSFORMIX not found"
+  "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
+    die "--elastix needs numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
+  source "$ROOT/bench/accuracy/elastix.sh"
+  elastix_check || die "bad elastix parameters"
+fi
+[ -n "$BCPD$AMM$SYN$ELASTIX" ] ||
+  echo "compare_peers.sh: none of --bcpd, --amm, --syn, --elastix given: every peer is skipped"
 
 source "$ROOT/bench/accuracy/ensure_pairs.sh"
 output_dir peers
@@ -139,7 +158,7 @@ both = np.vstack([source, tgt])
 scale = 0.6 / (both.max(axis=0) - both.min(axis=0)).max()  # vdb_match's placement, margin 0.2
 err = np.linalg.norm(phi - truth, axis=1) * scale
 motion = pair["motion"]["meanWorld"] * scale
-print("%-21s %-6s %9.2e %9.2e %9.2e %8.1f %8.0f" % (pair["name"], peer, err.mean(),
+print("%-21s %-7s %9.2e %9.2e %9.2e %8.1f %8.0f" % (pair["name"], peer, err.mean(),
       np.percentile(err, 95), motion, float(wall), int(rss) / 1024))
 new = not os.path.exists(tsv)
 with open(tsv, "a") as f:
@@ -172,13 +191,58 @@ syn_run() {
     --input "$rd/sdf/source_points.csv" --output "$rd/syn_points.csv" \
     --transform "$rd/syn_1Warp.nii.gz" --transform "$rd/syn_0GenericAffine.mat" \
     >>"$rd/syn.log" 2>&1 || return 1
-  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$rd" "$dim" <<'PY'
+  image_peer_result "$rd" "$dim" syn
+}
+
+# elastix_run DIM RUNDIR: elastix's B-spline registration (bench/accuracy/elastix.sh) on
+# RUNDIR/sdf, then transformix -def maps the source's vertices into RUNDIR/elastix_phi.xyz (world
+# units). Time and peak memory of both steps in RUNDIR/elastix.time.
+elastix_run() {
+  local dim=$1 rd=$2 threads=()
+  [ -z "${ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS:-}" ] || threads=(-threads "$ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS")
+  mkdir -p "$rd/elastix" "$rd/transformix"
+  elastix_parameters "$dim" "$rd/elastix/parameters.txt"
+  "$PYTHON" - "$rd/sdf/source_points.csv" "$rd/elastix_source_points.txt" <<'PY'
+import sys
+import numpy as np
+p = np.loadtxt(sys.argv[1], delimiter=",", skiprows=1, ndmin=2)
+dim = len(open(sys.argv[1]).readline().split(",")) - 3  # x,y[,z],t,label,comment
+with open(sys.argv[2], "w") as f:
+    f.write(f"point\n{len(p)}\n")
+    f.writelines(" ".join(repr(float(c)) for c in q[:dim]) + "\n" for q in p)
+PY
+  /usr/bin/time -f '%e %M' -o "$rd/elastix.reg.time" "$ELASTIX" -f "$rd/sdf/source_sdf.mhd" \
+    -m "$rd/sdf/target_sdf.mhd" -p "$rd/elastix/parameters.txt" -out "$rd/elastix" "${threads[@]}" \
+    >"$rd/elastix.log" 2>&1 || return 1
+  /usr/bin/time -f '%e %M' -o "$rd/elastix.map.time" "$TRANSFORMIX" -def "$rd/elastix_source_points.txt" \
+    -tp "$rd/elastix/TransformParameters.0.txt" -out "$rd/transformix" "${threads[@]}" \
+    >>"$rd/elastix.log" 2>&1 || return 1
+  "$PYTHON" - "$rd/transformix/outputpoints.txt" "$rd/elastix_points.csv" "$dim" <<'PY'
+import re, sys
+dim = int(sys.argv[3])
+num = r"([-+0-9.eEinfINFaA]+)"
+with open(sys.argv[2], "w") as f:
+    f.write("x,y,z\n"[: 2 * dim - 1] + "\n")
+    for line in open(sys.argv[1]):
+        m = re.search(r"OutputPoint = \[\s*" + r"\s+".join([num] * dim), line)
+        f.write(",".join(m.groups()) + "\n")
+PY
+  image_peer_result "$rd" "$dim" elastix
+}
+
+# image_peer_result RUNDIR DIM NAME: for an image peer's mapped points RUNDIR/NAME_points.csv
+# (unit box, a header line, then x,y[,z] first on each line), writes RUNDIR/NAME_phi.xyz (world
+# units), RUNDIR/NAME_residual.txt (mean |d2(phi(v))| sampled in the target's image, and h) and
+# RUNDIR/NAME.time (the wall times of NAME.reg.time and NAME.map.time added up, the larger peak
+# memory).
+image_peer_result() {
+  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$1" "$2" "$3" <<'PY'
 import json, os, sys
 import numpy as np
-rd, dim = sys.argv[1], int(sys.argv[2])
+rd, dim, name = sys.argv[1], int(sys.argv[2]), sys.argv[3]
 place = json.load(open(f"{rd}/sdf/placement.json"))
-unit = np.loadtxt(f"{rd}/syn_points.csv", delimiter=",", skiprows=1, ndmin=2)[:, :dim]
-np.savetxt(f"{rd}/syn_phi.xyz", unit / place["scale"] + np.array(place["origin"]), fmt="%.9g")
+unit = np.loadtxt(f"{rd}/{name}_points.csv", delimiter=",", skiprows=1, ndmin=2)[:, :dim]
+np.savetxt(f"{rd}/{name}_phi.xyz", unit / place["scale"] + np.array(place["origin"]), fmt="%.9g")
 # how closely T fits the target: |d2(T(v))| sampled in the target's image
 sys.path.insert(0, os.environ["ACCURACY_DIR"])
 from sdf_images import sample  # noqa: E402  (bench/accuracy/sdf_images.py)
@@ -186,17 +250,25 @@ header = dict(l.split(" = ", 1) for l in open(f"{rd}/sdf/target_sdf.mhd").read()
 n, h = int(header["DimSize"].split()[0]), float(header["ElementSpacing"].split()[0])
 d2 = np.fromfile(f"{rd}/sdf/target_sdf.raw", np.float32).reshape((n,) * dim).transpose()
 res = sample(d2, h, unit)
-open(f"{rd}/syn_residual.txt", "w").write("%.6g %.6g\n" % (np.abs(res).mean(), h))
-# the wall times add up, the peak memory is the larger of the two steps
-reg, pts = (open(f"{rd}/syn.{k}.time").read().split()[-2:] for k in ("reg", "map"))
-open(f"{rd}/syn.time", "w").write(
+open(f"{rd}/{name}_residual.txt", "w").write("%.6g %.6g\n" % (np.abs(res).mean(), h))
+reg, pts = (open(f"{rd}/{name}.{k}.time").read().split()[-2:] for k in ("reg", "map"))
+open(f"{rd}/{name}.time", "w").write(
     "%.2f %d\n" % (float(reg[0]) + float(pts[0]), max(int(reg[1]), int(pts[1]))))
 PY
 }
 
+# sdf_images PAIRDIR DIM RUNDIR: the signed-distance images of the pair in RUNDIR/sdf (level 7 in
+# 3D, 9 in 2D), once per run directory.
+sdf_images() {
+  local level=7
+  [ "$2" = 3 ] || level=9
+  [ -f "$3/sdf/placement.json" ] && [ "$3/sdf/placement.json" -nt "$1/pair.json" ] && return 0
+  "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$1" --level "$level" --out "$3/sdf"
+}
+
 rm -f "$OUT/peers.tsv"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
-printf '%-21s %-6s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
+printf '%-21s %-7s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
 for p in "${PAIR_LIST[@]}"; do
   pd=$OUT/pairs/$p
   dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
@@ -222,19 +294,24 @@ for p in "${PAIR_LIST[@]}"; do
       read -r wall rss <"$rd/amm.time"
       score "$pd" "$target" "$rd/amm_res.obj" AMM "$wall" "$rss"
     else
-      printf '%-21s %-6s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
+      printf '%-21s %-7s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
     fi
   fi
   if [ -n "$SYN" ]; then
-    level=7
-    [ "$dim" = 3 ] || level=9
-    "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$pd" --level "$level" --out "$rd/sdf" \
-      || die "sdf_images.py failed on $p"
+    sdf_images "$pd" "$dim" "$rd" || die "sdf_images.py failed on $p"
     syn_run "$dim" "$rd" || { tail -n 5 "$rd/syn.log" >&2; die "SyN failed on $p"; }
     read -r wall rss <"$rd/syn.time"
     score "$pd" "$target" "$rd/syn_phi.xyz" SyN "$wall" "$rss"
     read -r res h <"$rd/syn_residual.txt"
-    printf '%-21s %-6s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" SyN "$res" "$h"
+    printf '%-21s %-7s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" SyN "$res" "$h"
+  fi
+  if [ -n "$ELASTIX" ]; then
+    sdf_images "$pd" "$dim" "$rd" || die "sdf_images.py failed on $p"
+    elastix_run "$dim" "$rd" || { tail -n 5 "$rd/elastix.log" >&2; die "elastix failed on $p"; }
+    read -r wall rss <"$rd/elastix.time"
+    score "$pd" "$target" "$rd/elastix_phi.xyz" elastix "$wall" "$rss"
+    read -r res h <"$rd/elastix_residual.txt"
+    printf '%-21s %-7s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" elastix "$res" "$h"
   fi
 done
 [ $KEEP = 0 ] || echo "results: $OUT/peers.tsv"
