@@ -176,51 +176,6 @@ SDF_SECONDS=$("$PYTHON" "$WORK/sdf.py" "$PAIR" "$WORK" "$LEVEL" "$SDF_BAND")
 
 # ---- 3. elastix and transformix ----------------------------------------------------------------
 elastix_parameters 3 "$WORK/elastix/parameters.txt"
-// written by bench/compare_elastix.sh: B-spline registration of two signed-distance volumes
-(FixedInternalImagePixelType "float")
-(MovingInternalImagePixelType "float")
-(FixedImageDimension 3)
-(MovingImageDimension 3)
-(UseDirectionCosines "true")
-(NumberOfResolutions $ELASTIX_RESOLUTIONS)
-(FixedImagePyramid "FixedRecursiveImagePyramid")
-(MovingImagePyramid "MovingRecursiveImagePyramid")
-(ImagePyramidSchedule $(for f in $ELASTIX_PYRAMID; do printf '%s %s %s ' "$f" "$f" "$f"; done))
-(Transform "BSplineTransform")
-(BSplineTransformSplineOrder 3)
-(FinalGridSpacingInVoxels $ELASTIX_GRID_SPACING $ELASTIX_GRID_SPACING $ELASTIX_GRID_SPACING)
-(GridSpacingSchedule $(for f in $ELASTIX_GRID_SCHEDULE; do printf '%s %s %s ' "$f" "$f" "$f"; done))
-(HowToCombineTransforms "Compose")
-$(if [ "$ELASTIX_BENDING" = 0 ]; then
-  echo '(Registration "MultiResolutionRegistration")'
-  echo '(Metric "AdvancedMeanSquares")'
-else
-  echo '(Registration "MultiMetricMultiResolutionRegistration")'
-  echo '(Metric "AdvancedMeanSquares" "TransformBendingEnergyPenalty")'
-  echo '(Metric0Weight 1.0)'
-  echo "(Metric1Weight $ELASTIX_BENDING)"
-fi)
-(Optimizer "AdaptiveStochasticGradientDescent")
-(AutomaticParameterEstimation "true")
-(ASGDParameterEstimationMethod "Original")
-(MaximumNumberOfIterations $ELASTIX_ITERATIONS)
-(ImageSampler "$ELASTIX_SAMPLER")
-(NumberOfSpatialSamples $ELASTIX_SAMPLES)
-(NewSamplesEveryIteration "true")
-(CheckNumberOfSamples "true")
-(Interpolator "BSplineInterpolator")
-(BSplineInterpolationOrder 1)
-(ResampleInterpolator "FinalBSplineInterpolator")
-(FinalBSplineInterpolationOrder 1)
-(Resampler "DefaultResampler")
-(DefaultPixelValue 0)
-(WriteResultImage "false")
-(ResultImageFormat "mhd")
-(ResultImagePixelType "float")
-(WriteTransformParametersEachIteration "false")
-(WriteTransformParametersEachResolution "false")
-(ShowExactMetricValue "false")
-EOF
 
 /usr/bin/time -f '%e %M' -o "$WORK/elastix/time.txt" \
   elastix -f "$WORK/source_sdf.mhd" -m "$WORK/target_sdf.mhd" -p "$WORK/elastix/parameters.txt" \

@@ -280,6 +280,7 @@ for p in "${PAIR_LIST[@]}"; do
     points "$target" "$rd/X.txt"
     points "$pd/source.$ext" "$rd/Y.txt"
     accel=()
+    # shellcheck disable=SC2054  # -DB,5000,0.02 is one BCPD option
     [ "$dim" = 2 ] || accel=(-J300 -K70 -p -f0.3 -DB,5000,0.02)
     ( cd "$rd" && /usr/bin/time -f '%e %M' -o bcpd.time "$BCPD" -x X.txt -y Y.txt -w0.0 -l50 -b2.0 \
         -g0.1 -ux "${accel[@]}" -c1e-6 -n500 -r1 -o bcpd_ -sy >bcpd.log 2>&1 ) \

@@ -1,3 +1,4 @@
+# shellcheck shell=bash
 # Sourced by bench/compare_elastix.sh and bench/compare_peers.sh: the elastix B-spline
 # registration of two signed-distance images, the same for every pair (not tuned per pair).
 #
@@ -48,9 +49,9 @@ elastix_parameters() {
   local dim=$1 file=$2
   # each per-resolution factor repeated once per axis
   per_axis() {
-    local f
+    local f i
     for f in $1; do
-      printf "%s " $(for _ in $(seq "$dim"); do echo "$f"; done)
+      for ((i = 0; i < dim; i++)); do printf '%s ' "$f"; done
     done
   }
   {
