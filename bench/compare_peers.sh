@@ -98,17 +98,17 @@ if [ -n "$SYN" ]; then
   [ -x "$SYN" ] || die "--syn $SYN is not an executable"
   SYN_POINTS=$(dirname "$SYN")/antsApplyTransformsToPoints
   [ -x "$SYN_POINTS" ] || die "--syn: $SYN_POINTS not found (build that target of ANTs too)"
-  "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
-    die "--syn needs numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
 fi
 if [ -n "$ELASTIX" ]; then
   [ -x "$ELASTIX" ] || die "--elastix $ELASTIX is not an executable"
   TRANSFORMIX=$(dirname "$ELASTIX")/transformix
   [ -x "$TRANSFORMIX" ] || die "--elastix: $TRANSFORMIX not found"
-  "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
-    die "--elastix needs numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
   source "$ROOT/bench/accuracy/elastix.sh"
   elastix_check || die "bad elastix parameters"
+fi
+if [ -n "$SYN$ELASTIX" ]; then  # the signed-distance images (bench/accuracy/sdf_images.py)
+  "$PYTHON" -c 'import numpy, pyopenvdb' 2>/dev/null ||
+    die "--syn and --elastix need numpy and pyopenvdb in $PYTHON (apt-get install -y python3-numpy python3-openvdb)"
 fi
 [ -n "$BCPD$AMM$SYN$ELASTIX" ] ||
   echo "compare_peers.sh: none of --bcpd, --amm, --syn, --elastix given: every peer is skipped"
@@ -266,6 +266,19 @@ sdf_images() {
   "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$1" --level "$level" --out "$3/sdf"
 }
 
+# image_peer NAME RUN PREFIX: an image peer on the current pair (the loop's p, pd, dim, rd and
+# target): its signed-distance images, RUN DIM RUNDIR (syn_run, elastix_run), then its score row
+# and its residual.
+image_peer() {
+  local name=$1 run=$2 prefix=$3 wall rss res h
+  sdf_images "$pd" "$dim" "$rd" || die "sdf_images.py failed on $p"
+  "$run" "$dim" "$rd" || { tail -n 5 "$rd/$prefix.log" >&2; die "$name failed on $p"; }
+  read -r wall rss <"$rd/$prefix.time"
+  score "$pd" "$target" "$rd/${prefix}_phi.xyz" "$name" "$wall" "$rss"
+  read -r res h <"$rd/${prefix}_residual.txt"
+  printf '%-21s %-7s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" "$name" "$res" "$h"
+}
+
 rm -f "$OUT/peers.tsv"
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //')"
 printf '%-21s %-7s %9s %9s %9s %8s %8s\n' pair peer "err mean" "err p95" motion "wall s" "peak MB"
@@ -298,21 +311,7 @@ for p in "${PAIR_LIST[@]}"; do
       printf '%-21s %-7s %s\n' "$p" AMM "skipped: 3D triangle meshes only"
     fi
   fi
-  if [ -n "$SYN" ]; then
-    sdf_images "$pd" "$dim" "$rd" || die "sdf_images.py failed on $p"
-    syn_run "$dim" "$rd" || { tail -n 5 "$rd/syn.log" >&2; die "SyN failed on $p"; }
-    read -r wall rss <"$rd/syn.time"
-    score "$pd" "$target" "$rd/syn_phi.xyz" SyN "$wall" "$rss"
-    read -r res h <"$rd/syn_residual.txt"
-    printf '%-21s %-7s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" SyN "$res" "$h"
-  fi
-  if [ -n "$ELASTIX" ]; then
-    sdf_images "$pd" "$dim" "$rd" || die "sdf_images.py failed on $p"
-    elastix_run "$dim" "$rd" || { tail -n 5 "$rd/elastix.log" >&2; die "elastix failed on $p"; }
-    read -r wall rss <"$rd/elastix.time"
-    score "$pd" "$target" "$rd/elastix_phi.xyz" elastix "$wall" "$rss"
-    read -r res h <"$rd/elastix_residual.txt"
-    printf '%-21s %-7s residual mean |d2(phi(v))| %s (h = %s, unit box)\n' "$p" elastix "$res" "$h"
-  fi
+  [ -z "$SYN" ] || image_peer SyN syn_run syn
+  [ -z "$ELASTIX" ] || image_peer elastix elastix_run elastix
 done
 [ $KEEP = 0 ] || echo "results: $OUT/peers.tsv"
