@@ -145,7 +145,7 @@ import json, sys, time
 import numpy as np
 
 sys.path.insert(0, "bench/accuracy")
-from sdf_images import read_obj, sdf_mesh  # noqa: E402  (the same volumes as compare_peers.sh --syn)
+from sdf_images import read_obj, sdf_mesh, write_mhd, write_transformix_points  # noqa: E402
 
 pair, work, level, band = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
 placement = json.load(open(f"{work}/vdb_match/report.json"))["placement"]
@@ -158,18 +158,9 @@ for name in ("source", "target"):
     pts, tris = read_obj(f"{pair}/{name}.obj")
     pts = scale * (pts - origin)  # unit box
     a = sdf_mesh(pts, tris, n, h, band)  # a[i, j, k] = d((i, j, k) * h), unit-box lengths
-    # MetaImage: x fastest, so write the (k, j, i) layout in C order
-    np.ascontiguousarray(a.transpose(2, 1, 0)).tofile(f"{work}/{name}_sdf.raw")
-    with open(f"{work}/{name}_sdf.mhd", "w") as f:
-        f.write("ObjectType = Image\nNDims = 3\nBinaryData = True\nBinaryDataByteOrderMSB = False\n"
-                "CompressedData = False\nTransformMatrix = 1 0 0 0 1 0 0 0 1\n"
-                "Offset = 0 0 0\nCenterOfRotation = 0 0 0\n"
-                f"ElementSpacing = {h!r} {h!r} {h!r}\nDimSize = {n} {n} {n}\n"
-                f"ElementType = MET_FLOAT\nElementDataFile = {name}_sdf.raw\n")
+    write_mhd(f"{work}/{name}_sdf.mhd", a, h)
     if name == "source":
-        with open(f"{work}/source_points.txt", "w") as f:
-            f.write(f"point\n{len(pts)}\n")
-            f.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in pts)
+        write_transformix_points(f"{work}/source_points.txt", pts)
 print(f"{time.time() - t0:.1f}")
 PY
 SDF_SECONDS=$("$PYTHON" "$WORK/sdf.py" "$PAIR" "$WORK" "$LEVEL" "$SDF_BAND")
@@ -191,11 +182,11 @@ transformix -jac all -tp "$WORK/elastix/TransformParameters.0.txt" -out "$WORK/j
 
 # ---- 4. evaluation -----------------------------------------------------------------------------
 cat >"$WORK/evaluate.py" <<'PY'
-import json, re, sys
+import json, sys
 import numpy as np
 
 sys.path.insert(0, "bench/accuracy")
-from sdf_images import sample  # noqa: E402
+from sdf_images import read_transformix_points, sample  # noqa: E402
 
 pair, work, level, sdfSeconds = sys.argv[1], sys.argv[2], int(sys.argv[3]), float(sys.argv[4])
 tsv = sys.argv[5] if len(sys.argv) > 5 else ""
@@ -232,9 +223,7 @@ truth = toUnit(np.loadtxt(f"{pair}/truth.xyz", ndmin=2)[:, :3])
 if len(truth) != len(source):
     sys.exit(f"compare_elastix.sh: truth.xyz has {len(truth)} points, source.obj {len(source)} vertices")
 phiV = toUnit(objPoints(f"{work}/vdb_match/deformed.obj"))
-num = r"([-+0-9.eEinfINFaA]+)"
-phiE = np.array([[float(c) for c in re.search(r"OutputPoint = \[\s*" + r"\s+".join([num] * 3), l).groups()]
-                 for l in open(f"{work}/transformix/outputpoints.txt")])
+phiE = read_transformix_points(f"{work}/transformix/outputpoints.txt", 3)
 assert len(phiV) == len(source) and len(phiE) == len(source)
 
 rows = {}

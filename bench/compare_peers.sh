@@ -202,30 +202,20 @@ elastix_run() {
   [ -z "${ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS:-}" ] || threads=(-threads "$ITK_GLOBAL_DEFAULT_NUMBER_OF_THREADS")
   mkdir -p "$rd/elastix" "$rd/transformix"
   elastix_parameters "$dim" "$rd/elastix/parameters.txt"
-  "$PYTHON" - "$rd/sdf/source_points.csv" "$rd/elastix_source_points.txt" <<'PY'
-import sys
-import numpy as np
-p = np.loadtxt(sys.argv[1], delimiter=",", skiprows=1, ndmin=2)
-dim = len(open(sys.argv[1]).readline().split(",")) - 3  # x,y[,z],t,label,comment
-with open(sys.argv[2], "w") as f:
-    f.write(f"point\n{len(p)}\n")
-    f.writelines(" ".join(repr(float(c)) for c in q[:dim]) + "\n" for q in p)
-PY
   /usr/bin/time -f '%e %M' -o "$rd/elastix.reg.time" "$ELASTIX" -f "$rd/sdf/source_sdf.mhd" \
     -m "$rd/sdf/target_sdf.mhd" -p "$rd/elastix/parameters.txt" -out "$rd/elastix" "${threads[@]}" \
     >"$rd/elastix.log" 2>&1 || return 1
-  /usr/bin/time -f '%e %M' -o "$rd/elastix.map.time" "$TRANSFORMIX" -def "$rd/elastix_source_points.txt" \
+  /usr/bin/time -f '%e %M' -o "$rd/elastix.map.time" "$TRANSFORMIX" -def "$rd/sdf/source_points.txt" \
     -tp "$rd/elastix/TransformParameters.0.txt" -out "$rd/transformix" "${threads[@]}" \
     >>"$rd/elastix.log" 2>&1 || return 1
-  "$PYTHON" - "$rd/transformix/outputpoints.txt" "$rd/elastix_points.csv" "$dim" <<'PY'
-import re, sys
-dim = int(sys.argv[3])
-num = r"([-+0-9.eEinfINFaA]+)"
-with open(sys.argv[2], "w") as f:
-    f.write("x,y,z\n"[: 2 * dim - 1] + "\n")
-    for line in open(sys.argv[1]):
-        m = re.search(r"OutputPoint = \[\s*" + r"\s+".join([num] * dim), line)
-        f.write(",".join(m.groups()) + "\n")
+  ACCURACY_DIR=$ROOT/bench/accuracy "$PYTHON" - "$rd" "$dim" <<'PY'
+import os, sys
+import numpy as np
+sys.path.insert(0, os.environ["ACCURACY_DIR"])
+from sdf_images import read_transformix_points  # noqa: E402  (bench/accuracy/sdf_images.py)
+rd, dim = sys.argv[1], int(sys.argv[2])
+np.savetxt(f"{rd}/elastix_points.csv", read_transformix_points(f"{rd}/transformix/outputpoints.txt", dim),
+           delimiter=",", fmt="%.9g", header=",".join("xyz"[:dim]), comments="")
 PY
   image_peer_result "$rd" "$dim" elastix
 }
@@ -262,7 +252,7 @@ PY
 sdf_images() {
   local level=7
   [ "$2" = 3 ] || level=9
-  [ -f "$3/sdf/placement.json" ] && [ "$3/sdf/placement.json" -nt "$1/pair.json" ] && return 0
+  [ -f "$3/sdf/source_points.txt" ] && [ "$3/sdf/placement.json" -nt "$1/pair.json" ] && return 0
   "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$1" --level "$level" --out "$3/sdf"
 }
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Signed-distance images of a pair's two shapes, for the image-registration peers
-(bench/compare_peers.sh --syn).
+(bench/compare_peers.sh --syn and --elastix, bench/compare_elastix.sh).
 
     sdf_images.py --pair PAIRDIR --level L --out DIR [--band X]
 
@@ -14,6 +14,7 @@ Writes into DIR:
                                              directions: physical coordinates = unit-box ones
   source_points.csv                          the source's vertices in unit-box coordinates, in
                                              ANTs' point format (x,y[,z],t,label,comment)
+  source_points.txt                          the same, in transformix's input point format
   placement.json                             {"origin": [...], "scale": s}: unit = s (world - origin)
 3D distances come from OpenVDB's mesh-to-volume (pyopenvdb); 2D ones are exact distances to the
 closed polyline's segments, signed by the even-odd rule.
@@ -22,6 +23,7 @@ closed polyline's segments, signed by the even-odd rule.
 import argparse
 import json
 import os
+import re
 import sys
 
 import numpy as np
@@ -142,6 +144,21 @@ def write_mhd(path, a, h):
                 f"ElementType = MET_FLOAT\nElementDataFile = {os.path.basename(raw)}\n")
 
 
+def write_transformix_points(path, unit):
+    """transformix's input point file (-def): "point", the count, then one point per line."""
+    with open(path, "w") as f:
+        f.write(f"point\n{len(unit)}\n")
+        f.writelines(" ".join(repr(float(c)) for c in p) + "\n" for p in unit)
+
+
+def read_transformix_points(path, dim):
+    """The mapped points (OutputPoint) of transformix -def's outputpoints.txt, (m, dim)."""
+    num = r"([-+0-9.eEinfINFaA]+)"
+    pattern = re.compile(r"OutputPoint = \[\s*" + r"\s+".join([num] * dim))
+    return np.array([[float(c) for c in pattern.search(line).groups()] for line in open(path)
+                     if "OutputPoint" in line]).reshape(-1, dim)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pair", required=True)
@@ -171,6 +188,7 @@ def main():
     with open(os.path.join(args.out, "source_points.csv"), "w") as f:
         f.write(",".join(axes) + ",t,label,comment\n")
         f.writelines(",".join(repr(float(c)) for c in p) + ",0,0,0\n" for p in unit)
+    write_transformix_points(os.path.join(args.out, "source_points.txt"), unit)
     with open(os.path.join(args.out, "placement.json"), "w") as f:
         json.dump({"origin": origin.tolist(), "scale": scale}, f)
 

@@ -116,3 +116,22 @@ def test_sample_is_multilinear():
     assert sample(a, h, nodes * h) == pytest.approx(a[tuple(nodes.T)])  # values at the nodes
     b = a[:, :, 0] * a[:, :, 0]  # 2D, bilinear: the cell centre is the mean of its corners
     assert sample(b, h, np.array([[0.125, 0.375]]))[0] == pytest.approx(b[0:2, 1:3].mean())
+
+
+def test_transformix_points_round_trip(tmp_path):
+    sys.path.insert(0, os.path.dirname(SCRIPT))
+    from sdf_images import read_transformix_points, write_transformix_points
+
+    for dim in (2, 3):
+        p = np.random.default_rng(dim).uniform(0, 1, (7, dim))
+        write_transformix_points(str(tmp_path / "in.txt"), p)
+        lines = (tmp_path / "in.txt").read_text().splitlines()
+        assert lines[:2] == ["point", "7"] and len(lines[2].split()) == dim
+        # transformix -def writes one line per point; OutputPoint is the mapped one
+        with open(tmp_path / "out.txt", "w") as f:
+            for k, q in enumerate(p):
+                c = " ".join(repr(float(x)) for x in q)
+                f.write(f"Point\t{k}\t; InputIndex = [ 0 0 ]\t; InputPoint = [ {c} ]\t; "
+                        f"OutputIndexFixed = [ 0 0 ]\t; OutputPoint = [ {' '.join(repr(float(x) + 1) for x in q)} ]"
+                        f"\t; Deformation = [ 1 1 ]\n")
+        assert read_transformix_points(str(tmp_path / "out.txt"), dim) == pytest.approx(p + 1)
