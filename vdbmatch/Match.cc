@@ -126,6 +126,7 @@ MatchOptions::defaults(int dim)
         dim == 2 ? DEFAULT_MATCH_MEMBRANE_SATURATION_2D : DEFAULT_MATCH_MEMBRANE_SATURATION_3D;
     opts.multiscale.membraneSaturationLevels = DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS;
     opts.autoLandmarks = true;
+    opts.autoAnchors = true;
     return opts;
 }
 
@@ -156,6 +157,16 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: autoLandmarkMinMotion must be finite and >= 0, got "
                           << autoLandmarkMinMotion);
+    }
+    if (!(anchorWeight >= 0) || !std::isfinite(anchorWeight)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: anchorWeight must be finite and >= 0, got " << anchorWeight);
+    }
+    if (!(anchorOptions.tolerance >= 0) || !std::isfinite(anchorOptions.tolerance) ||
+        !(anchorOptions.radius >= 0) || !std::isfinite(anchorOptions.radius)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: the anchor tolerance and radius must be finite and >= 0, got "
+                          << anchorOptions.tolerance << " and " << anchorOptions.radius);
     }
     if (autoLandmarkLevels < 1) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -321,6 +332,18 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.source.push_back(wa);
         out.target.push_back(wb);
     }
+    if (opts.autoAnchors) {
+        StillAnchorOptions ao = opts.anchorOptions;
+        ao.threaded = opts.threaded;
+        const StillAnchors<D> anchors = findStillAnchors<D>(unitSource, unitTarget, ao);
+        out.anchorCoincidentShare = anchors.coincidentShare();
+        for (const Vec<D>& p : anchors.points) {
+            openvdb::Vec3d w = world(p);
+            if (D == 2) w[2] = 0;
+            out.anchors.push_back(w);
+        }
+        out.seconds = secondsSince(start);
+    }
     return out;
 }
 
@@ -406,6 +429,27 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         result.landmarks.startMaxWorld = std::max(result.landmarks.startMaxWorld, r);
     }
     result.landmarks.count = landmarks.source.size();
+    // Automatic anchors (geometry/StillAnchors.h): held still at every level, each with weight
+    // c_an / N, beside the automatic landmarks (each c_lm / K) at their levels.
+    LandmarkPairs<D> guided, anchored;
+    if (!result.autoLandmarks.anchors.empty()) {
+        const std::size_t k = landmarks.source.size(), n = result.autoLandmarks.anchors.size();
+        guided = landmarks;
+        guided.pairWeights.assign(k, Real(opts.landmarkWeight) / Real(k));
+        anchored.weight = Real(opts.anchorWeight);
+        for (const openvdb::Vec3d& w : result.autoLandmarks.anchors) {
+            const openvdb::Vec3d u = placement.toUnit(w);
+            Vec<D> a;
+            for (int i = 0; i < D; ++i)
+                a[i] = u[i];
+            guided.source.push_back(a);
+            guided.target.push_back(a);
+            guided.pairWeights.push_back(Real(opts.anchorWeight) / Real(n));
+            anchored.source.push_back(a);
+            anchored.target.push_back(a);
+        }
+    }
+    const LandmarkPairs<D>& early = guided.source.empty() ? landmarks : guided;
     std::shared_ptr<const FieldSampler<D>> lastTarget;
     LevelSummary pending;
     // Distance tiers shared between levels (the coarse box and the band two levels down).
@@ -434,7 +478,11 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 buildTarget();
             }
             level.surfacePoints = &unitSource.points;
-            if (!landmarks.source.empty() && l <= lastLandmarkLevel) level.landmarks = &landmarks;
+            if (l <= lastLandmarkLevel) {
+                if (!early.source.empty()) level.landmarks = &early;
+            } else if (!anchored.source.empty()) {
+                level.landmarks = &anchored;
+            }
             summary.fieldSeconds = secondsSince(t0);
 
             t0 = Clock::now();

@@ -35,6 +35,7 @@
 
 #include <vdbmatch/Types.h>
 #include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/StillAnchors.h>
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/UnitBox.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
@@ -63,6 +64,8 @@ namespace vdbmatch {
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 /// Default c_lm of the landmark term (energy/LandmarkTerm.h): docs/numerics.md "Landmarks".
 constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
+/// Default c_an, the total weight of the automatic anchors (MatchOptions::anchorWeight).
+constexpr double DEFAULT_ANCHOR_WEIGHT = 1000;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
@@ -191,6 +194,15 @@ struct MatchOptions
     /// The automatic landmarks act only when some pair lies farther apart than this many sigma
     /// of the first level (>= 0; 0: always): a smaller motion the shape energy sees by itself.
     double autoLandmarkMinMotion = 1;
+    /// Automatic anchors, an addition to the paper (docs/numerics.md "Automatic anchors"): when
+    /// the automatic landmarks act, points of M1 around which M2 coincides with it
+    /// (geometry/StillAnchors.h) are held still, phi(x) = x, by a soft term of total weight
+    /// anchorWeight (each anchor anchorWeight / count) at every level: what the large motion
+    /// left in place stays, instead of sliding along its own surface toward the moving limb.
+    /// On in defaults(), off in paper().
+    bool autoAnchors = false;
+    StillAnchorOptions anchorOptions;            ///< tolerance, radius and count (Omega units)
+    double anchorWeight = DEFAULT_ANCHOR_WEIGHT; ///< c_an >= 0, Omega units
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -250,6 +262,10 @@ struct AutoLandmarkSummary
     /// The pairs, world units (2D: z = 0), row k of each.
     std::vector<openvdb::Vec3d> source, target;
     int lastLevel = 0; ///< the landmarks act at the levels up to this one
+    /// Automatic anchors (MatchOptions::autoAnchors), world units (2D: z = 0); they act at
+    /// every level. Empty when not requested, not used, or M1 and M2 coincide nowhere.
+    std::vector<openvdb::Vec3d> anchors;
+    double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare()
     double seconds = 0;
 };
 

@@ -336,13 +336,18 @@ PY
     check auto-landmark-min-motion-bad 3 '' 'autoLandmarkMinMotion must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-min-motion -1 --quiet
     check match-2d-auto-landmarks-small 0 'automatic landmarks: not used: every extremity moves by less than 1 sigma' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2g" --levels 4..6
     check match-2d-auto-landmarks-off 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2o" --levels 4..6 --auto-landmarks off
-    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
+    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired .*, with [0-9]+ still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
+    check match-2d-auto-landmarks-no-anchors 0 'automatic landmarks: 5 extremities paired \(distortion [0-9.]*, largest motion [0-9.e-]* > 0 of the unit box\), acting at levels 4..5$' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2n" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0 --auto-anchors off
+    check auto-anchors-bad 1 '' "--auto-anchors expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-anchors 1 --quiet
+    check anchor-count-bad 1 '' '--anchor-count must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-count 0 --quiet
+    check anchor-weight-bad 3 '' 'anchorWeight must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-weight -1 --quiet
+    check anchor-radius-bad 3 '' 'the anchor tolerance and radius must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-radius -0.1 --quiet
     check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     count=$((count + 1))
-    if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
+    if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" "$SCRATCH/m2n" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
 import json, sys
-plain, auto, rev, again, small = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+plain, auto, rev, again, small, bare = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
 G = small["autoLandmarks"]
 assert G["paired"] and not G["used"] and G["maxMotion"] < G["minMotion"] == 0.125, G
 assert small["parameters"]["autoLandmarks"] == "on" and G["pairs"] == [], G
@@ -353,9 +358,17 @@ assert A["maxMotion"] == G["maxMotion"] and A["minMotion"] == 0, A
 assert A["lastLevel"] == 5 and auto["parameters"]["autoLandmarks"] == "on", A
 assert auto["parameters"]["autoLandmarkLevels"] == 2
 assert A["meanWorld"] < A["startMeanWorld"], A
-# The landmark term acts at levels 4 and 5, not at 6.
-terms = [l["terms"]["landmarks"] for l in auto["levels"]]
+# Without anchors the landmark term acts at levels 4 and 5, not at 6; with them (the
+# default), the anchors hold M1's still parts at every level.
+B = bare["autoLandmarks"]
+assert B["anchors"] == 0 and bare["parameters"]["autoAnchors"] == "off", B
+terms = [l["terms"]["landmarks"] for l in bare["levels"]]
 assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
+assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorCount"] == 100
+assert 0 < A["anchors"] <= 100 and 0 < A["anchorCoincidentShare"] < 1, A
+terms = [l["terms"]["landmarks"] for l in auto["levels"]]
+assert all(t > 0 for t in terms), terms
+assert small["autoLandmarks"]["anchors"] == 0  # no large motion: no landmarks, no anchors
 # Off: not reported; a config of the run reproduces it.
 assert "autoLandmarks" not in plain and plain["parameters"]["autoLandmarks"] == "off"
 assert again["autoLandmarks"] == dict(A, seconds=again["autoLandmarks"]["seconds"])

@@ -141,3 +141,46 @@ TEST(LandmarkTerm, RefusesBadInput)
     notFinite.target[2][0] = std::nan("");
     EXPECT_THROW(energy::LandmarkTerm<2>(lattice, notFinite), openvdb::ValueError);
 }
+
+TEST(LandmarkTerm, PairWeightsWeighEachPair)
+{
+    // w_k = c_lm / K for every pair is the plain term; unequal weights give
+    // sum_k w_k |phi(a_k) - b_k|^2 and its exact gradient (central differences of a quadratic).
+    const SimplexLattice<2> lattice = SimplexLattice<2>::dense(5);
+    const LandmarkPairs<2> plain = somePairs<2>(11, 6, 30.0);
+    LandmarkPairs<2> even = plain;
+    even.weight = 0; // unused with pair weights
+    even.pairWeights.assign(6, 30.0 / 6);
+    LandmarkPairs<2> uneven = plain;
+    uneven.pairWeights = {1.0, 0.0, 7.0, 0.5, 3.0, 20.0};
+    const energy::LandmarkTerm<2> a(lattice, plain), b(lattice, even), c(lattice, uneven);
+    std::mt19937 rng(4);
+    std::uniform_real_distribution<Real> U(-0.01, 0.01);
+    NodeVectors<2> u(2, lattice.nodeCount());
+    for (Eigen::Index i = 0; i < u.size(); ++i)
+        u.data()[i] = U(rng);
+    EXPECT_NEAR(b.value(u), a.value(u), 1e-14 * a.value(u));
+    Real expected = 0;
+    for (std::size_t k = 0; k < 6; ++k)
+        expected += uneven.pairWeights[k] * (c.mapped(u, k) - uneven.target[k]).squaredNorm();
+    EXPECT_NEAR(c.value(u), expected, 1e-15);
+    NodeVectors<2> g = NodeVectors<2>::Zero(2, lattice.nodeCount());
+    EXPECT_DOUBLE_EQ(c.addGradient(u, g), c.value(u));
+    NodeVectors<2> v(2, lattice.nodeCount());
+    for (Eigen::Index i = 0; i < v.size(); ++i)
+        v.data()[i] = U(rng);
+    const Real eps = 1e-3, slope = g.cwiseProduct(v).sum();
+    const Real fd = (c.value(u + eps * v) - c.value(u - eps * v)) / (2 * eps);
+    EXPECT_NEAR(fd, slope, 1e-9 * std::abs(slope) + 1e-15);
+    // With every weight 0 the term vanishes, whatever c_lm.
+    LandmarkPairs<2> only = uneven;
+    only.pairWeights = {0, 0, 0, 0, 0, 0};
+    EXPECT_EQ(energy::LandmarkTerm<2>(lattice, only).value(u), 0);
+    // Bad weights are refused.
+    LandmarkPairs<2> shortList = uneven;
+    shortList.pairWeights.pop_back();
+    EXPECT_THROW(energy::LandmarkTerm<2>(lattice, shortList), openvdb::ValueError);
+    LandmarkPairs<2> negative = uneven;
+    negative.pairWeights[2] = -1;
+    EXPECT_THROW(energy::LandmarkTerm<2>(lattice, negative), openvdb::ValueError);
+}

@@ -53,6 +53,11 @@ configKeys()
         {"autoLandmarks", "--auto-landmarks"},
         {"autoLandmarkLevels", "--auto-landmark-levels"},
         {"autoLandmarkMinMotion", "--auto-landmark-min-motion"},
+        {"autoAnchors", "--auto-anchors"},
+        {"anchorWeight", "--anchor-weight"},
+        {"anchorCount", "--anchor-count"},
+        {"anchorRadius", "--anchor-radius"},
+        {"anchorTolerance", "--anchor-tolerance"},
     };
     return keys;
 }
@@ -141,6 +146,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("autoLandmarks")) {
         settings.push_back({"autoLandmarks", "--auto-landmarks", "off"});
+    }
+    // ... and one before automatic anchors (no autoAnchors) had none.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("autoAnchors")) {
+        settings.push_back({"autoAnchors", "--auto-anchors", "off"});
     }
     return settings;
 }

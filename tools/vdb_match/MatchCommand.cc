@@ -97,6 +97,9 @@ struct MatchCliOptions
     std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
     int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
     double autoLandmarkMinMotion = MatchOptions::defaults(3).autoLandmarkMinMotion;
+    std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
+    double anchorWeight = DEFAULT_ANCHOR_WEIGHT;
+    StillAnchorOptions anchorOptions;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     bool writeInverse = true;       ///< inverse.vdb
     bool writeJacobian = true;      ///< jacobian.vdb
@@ -118,7 +121,11 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
            " extremities paired (distortion " + fixed("%.3f", a.distortion) + ", largest motion " +
            fixed("%.3g", a.maxMotion) + " > " + fixed("%.3g", a.minMotion) +
            " of the unit box), acting at levels " + std::to_string(firstLevel) + ".." +
-           std::to_string(a.lastLevel);
+           std::to_string(a.lastLevel) +
+           (a.anchors.empty() ? std::string()
+                              : ", with " + std::to_string(a.anchors.size()) +
+                                    " still anchors at every level (M1 and M2 coincide on " +
+                                    fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of M1)");
 }
 
 std::vector<Option<MatchCliOptions>>
@@ -215,7 +222,7 @@ matchOptionTable()
         {"--preset", "NAME", "Energy (paper tab:parameters)",
          "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
          "our additions that change the result (no surface test, one c_mem at every level, no "
-         "automatic landmarks, no landmarks unless given); "
+         "automatic landmarks or anchors, no landmarks unless given); "
          "options given override it (default: default)",
          [](O& o, const std::string& v) {
              if (v != "default" && v != "paper")
@@ -315,6 +322,42 @@ matchOptionTable()
          "first level, >= 0; 0: always (default " + formatNumber(d.autoLandmarkMinMotion) + ")",
          [](O& o, const std::string& v) {
              o.autoLandmarkMinMotion = parseDouble("--auto-landmark-min-motion", v);
+         }},
+        {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
+         "when the automatic landmarks act: hold still, at every level, up to --anchor-count "
+         "points of M1 around which M2 coincides with it (what the large motion left in place; "
+         "docs/numerics.md) (default " +
+             std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
+             "; --preset paper: off)",
+         [](O& o, const std::string& v) {
+             if (v != "on" && v != "off")
+                 throw UsageError("--auto-anchors expects 'on' or 'off', got '" + v + "'");
+             o.autoAnchors = v == "on";
+         }},
+        {"--anchor-weight", "X", "Landmarks (an addition to the paper)",
+         "c_an, the total weight of the automatic anchors, >= 0 (default " +
+             formatNumber(d.anchorWeight) + ")",
+         [](O& o, const std::string& v) { o.anchorWeight = parseDouble("--anchor-weight", v); }},
+        {"--anchor-count", "N", "Landmarks (an addition to the paper)",
+         "most automatic anchors, farthest-point samples of where M1 and M2 coincide, >= 1 "
+         "(default " + std::to_string(d.anchorOptions.count) + ")",
+         [](O& o, const std::string& v) {
+             const int n = parseInt("--anchor-count", v);
+             if (n < 1) throw UsageError("--anchor-count must be >= 1, got " + v);
+             o.anchorOptions.count = std::size_t(n);
+         }},
+        {"--anchor-radius", "R", "Landmarks (an addition to the paper)",
+         "M1 and M2 coincide around a point when every vertex of M1 within R of it is within "
+         "--anchor-tolerance of M2; unit-box lengths (default " +
+             formatNumber(d.anchorOptions.radius) + ")",
+         [](O& o, const std::string& v) {
+             o.anchorOptions.radius = parseDouble("--anchor-radius", v);
+         }},
+        {"--anchor-tolerance", "T", "Landmarks (an addition to the paper)",
+         "a vertex of M1 is on M2 when |d2| <= T; unit-box lengths (default " +
+             formatNumber(d.anchorOptions.tolerance) + ")",
+         [](O& o, const std::string& v) {
+             o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);
          }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
@@ -751,7 +794,12 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"landmarkWeight", opts.landmarkWeight},
              {"autoLandmarks", opts.autoLandmarks ? "on" : "off"},
              {"autoLandmarkLevels", opts.autoLandmarkLevels},
-             {"autoLandmarkMinMotion", opts.autoLandmarkMinMotion}});
+             {"autoLandmarkMinMotion", opts.autoLandmarkMinMotion},
+             {"autoAnchors", opts.autoAnchors ? "on" : "off"},
+             {"anchorWeight", opts.anchorWeight},
+             {"anchorCount", opts.anchorOptions.count},
+             {"anchorRadius", opts.anchorOptions.radius},
+             {"anchorTolerance", opts.anchorOptions.tolerance}});
     if (r.autoLandmarks.requested) {
         const AutoLandmarkSummary& a = r.autoLandmarks;
         Json pairs = Json::array();
@@ -770,6 +818,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                                   {"candidates", a.candidates},
                                   {"lastLevel", a.lastLevel},
                                   {"pairs", pairs},
+                                  {"anchors", a.anchors.size()},
+                                  {"anchorCoincidentShare", a.anchorCoincidentShare},
                                   {"seconds", a.seconds}};
         if (a.used) {
             j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
@@ -921,6 +971,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.autoLandmarks) opts.autoLandmarks = *o.autoLandmarks;
     opts.autoLandmarkLevels = o.autoLandmarkLevels;
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
+    if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
+    opts.anchorWeight = o.anchorWeight;
+    opts.anchorOptions = o.anchorOptions;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
         OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "

@@ -29,7 +29,8 @@ format(const Vec<D>& x)
 
 template <int D>
 LandmarkTerm<D>::LandmarkTerm(const SimplexLattice<D>& lattice, const LandmarkPairs<D>& pairs)
-    : mSource(pairs.source), mTarget(pairs.target), mWeight(pairs.weight)
+    : mSource(pairs.source), mTarget(pairs.target), mPairWeights(pairs.pairWeights),
+      mWeight(pairs.weight)
 {
     if (pairs.source.size() != pairs.target.size()) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -39,6 +40,19 @@ LandmarkTerm<D>::LandmarkTerm(const SimplexLattice<D>& lattice, const LandmarkPa
     if (!(pairs.weight >= 0) || !std::isfinite(pairs.weight)) {
         OPENVDB_THROW(openvdb::ValueError,
                       "landmarks: the weight must be finite and >= 0, got " << pairs.weight);
+    }
+    if (!mPairWeights.empty()) {
+        if (mPairWeights.size() != mSource.size()) {
+            OPENVDB_THROW(openvdb::ValueError, "landmarks: " << mPairWeights.size()
+                                                             << " pair weights for "
+                                                             << mSource.size() << " pairs");
+        }
+        for (Real w : mPairWeights) {
+            if (!(w >= 0) || !std::isfinite(w)) {
+                OPENVDB_THROW(openvdb::ValueError,
+                              "landmarks: a pair weight must be finite and >= 0, got " << w);
+            }
+        }
     }
     const multiscale::PiecewiseLinearInterpolator<D> locator(lattice);
     for (std::size_t k = 0; k < mSource.size(); ++k) {
@@ -69,6 +83,11 @@ LandmarkTerm<D>::value(const NodeVectors<D>& u) const
 {
     if (mTarget.empty()) return 0;
     Real sum = 0;
+    if (!mPairWeights.empty()) {
+        for (std::size_t k = 0; k < mTarget.size(); ++k)
+            sum += mPairWeights[k] * (mapped(u, k) - mTarget[k]).squaredNorm();
+        return sum; // as addGradient(), to the last bit
+    }
     for (std::size_t k = 0; k < mTarget.size(); ++k)
         sum += (mapped(u, k) - mTarget[k]).squaredNorm();
     return (mWeight / Real(mTarget.size())) * sum; // as addGradient(), to the last bit
@@ -79,6 +98,18 @@ Real
 LandmarkTerm<D>::addGradient(const NodeVectors<D>& u, NodeVectors<D>& gradient) const
 {
     if (mTarget.empty()) return 0;
+    if (!mPairWeights.empty()) {
+        Real sum = 0;
+        for (std::size_t k = 0; k < mTarget.size(); ++k) {
+            const Vec<D> r = mapped(u, k) - mTarget[k];
+            sum += mPairWeights[k] * r.squaredNorm();
+            const Location& loc = mLocations[k];
+            for (int m = 0; m <= D; ++m)
+                if (loc.weights[m] != 0)
+                    gradient.col(loc.nodes[m]) += (2 * mPairWeights[k] * loc.weights[m]) * r;
+        }
+        return sum;
+    }
     const Real scale = mWeight / Real(mTarget.size());
     Real sum = 0;
     for (std::size_t k = 0; k < mTarget.size(); ++k) {

@@ -5,10 +5,12 @@
 ///        and right arm of a figure whose pose changed a lot).
 ///
 /// @f[ E_{\mathrm{lm}}[\phi] = \frac{c_{\mathrm{lm}}}{K} \sum_{k=1}^K |\phi(a_k) - b_k|^2 @f]
-/// in Omega units. On a level's lattice phi(a_k) = a_k + sum_m lambda_km u(v_km), the P1
-/// interpolant on the Kuhn simplex containing a_k (multiscale::PiecewiseLinearInterpolator), a
-/// fixed linear function of the nodal displacements: the term is quadratic in u and its
-/// gradient, 2 c_lm / K (phi(a_k) - b_k) lambda_km at node v_km, is exact.
+/// in Omega units, or sum_k w_k |phi(a_k) - b_k|^2 with per-pair weights (two sets of different
+/// weights in one term: the automatic landmarks and anchors of match()). On a level's lattice
+/// phi(a_k) = a_k + sum_m lambda_km u(v_km), the P1 interpolant on the Kuhn simplex containing a_k
+/// (multiscale::PiecewiseLinearInterpolator), a fixed linear function of the nodal displacements:
+/// the term is quadratic in u and its gradient, 2 c_lm / K (phi(a_k) - b_k) lambda_km at node v_km,
+/// is exact.
 ///
 /// Only the direct residual is penalised, also for the symmetric energy: when the constraint
 /// holds, phi(a_k) = b_k, the inverse satisfies phi^{-1}(b_k) = a_k as well, so a run from M2 to
@@ -33,6 +35,9 @@ template <int D> struct LandmarkPairs
     std::vector<Vec<D>> source; ///< a_k, inside [0,1]^D
     std::vector<Vec<D>> target; ///< b_k, the same count
     Real weight = 0;            ///< c_lm >= 0
+    /// Optional per-pair weights w_k >= 0 (the same count): the term is then
+    /// sum_k w_k |phi(a_k) - b_k|^2 and `weight` is not used. Empty: w_k = c_lm / K.
+    std::vector<Real> pairWeights;
 };
 
 namespace energy {
@@ -62,6 +67,7 @@ private:
     using Location = typename multiscale::PiecewiseLinearInterpolator<D>::Location;
     std::vector<Location> mLocations; ///< the Kuhn simplex of each a_k and its weights
     std::vector<Vec<D>> mSource, mTarget;
+    std::vector<Real> mPairWeights; ///< LandmarkPairs::pairWeights
     Real mWeight = 0;
 };
 

@@ -1,0 +1,167 @@
+#include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/StillAnchors.h>
+
+#include <openvdb/Exceptions.h>
+#include <openvdb/openvdb.h>
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <unordered_map>
+
+namespace vdbmatch {
+
+namespace {
+
+/// d2 at @a x (Omega units) by (bi/tri)linear interpolation of the band's node values; off the
+/// band, its inactive values (+-background).
+template <int D>
+double
+interpolated(const openvdb::FloatGrid& grid, double h, const Vec<D>& x)
+{
+    const auto acc = grid.getConstAccessor();
+    std::array<int, 3> base{0, 0, 0};
+    std::array<double, 3> t{0, 0, 0};
+    for (int a = 0; a < D; ++a) {
+        const double s = x[a] / h;
+        base[a] = int(std::floor(s));
+        t[a] = s - base[a];
+    }
+    double value = 0;
+    for (int corner = 0; corner < (1 << D); ++corner) {
+        double w = 1;
+        openvdb::Coord ijk(base[0], base[1], base[2]);
+        for (int a = 0; a < D; ++a) {
+            const int bit = (corner >> a) & 1;
+            ijk[a] += bit;
+            w *= bit ? t[a] : 1 - t[a];
+        }
+        if (w != 0) value += w * double(acc.getValue(ijk));
+    }
+    return value;
+}
+
+/// Cells of side @a cell holding point indices, for "is any point within r" queries.
+template <int D> class PointHash
+{
+public:
+    PointHash(const std::vector<Vec<D>>& points, double cell) : mPoints(points), mCell(cell) {}
+
+    void insert(std::size_t i) { mCells[key(cellOf(mPoints[i]))].push_back(i); }
+
+    /// Whether some inserted point lies within @a r (<= the cell side) of @a x.
+    bool anyWithin(const Vec<D>& x, double r) const
+    {
+        const std::array<int64_t, D> c = cellOf(x);
+        for (int s = 0; s < (D == 3 ? 27 : 9); ++s) {
+            std::array<int64_t, D> n = c;
+            int rest = s;
+            for (int a = 0; a < D; ++a) {
+                n[a] += rest % 3 - 1;
+                rest /= 3;
+            }
+            const auto it = mCells.find(key(n));
+            if (it == mCells.end()) continue;
+            for (std::size_t j : it->second)
+                if ((mPoints[j] - x).squaredNorm() <= r * r) return true;
+        }
+        return false;
+    }
+
+private:
+    std::array<int64_t, D> cellOf(const Vec<D>& x) const
+    {
+        std::array<int64_t, D> c;
+        for (int a = 0; a < D; ++a)
+            c[a] = int64_t(std::floor(x[a] / mCell));
+        return c;
+    }
+    static int64_t key(const std::array<int64_t, D>& c)
+    {
+        // Omega points lie in [0, 1]; with cells >= 2^-20 the indices fit in 21 bits each.
+        int64_t k = 0;
+        for (int a = 0; a < D; ++a)
+            k = (k << 21) | ((c[a] + (int64_t(1) << 20)) & ((int64_t(1) << 21) - 1));
+        return k;
+    }
+
+    const std::vector<Vec<D>>& mPoints;
+    double mCell;
+    std::unordered_map<int64_t, std::vector<std::size_t>> mCells;
+};
+
+} // namespace
+
+template <int D>
+StillAnchors<D>
+findStillAnchors(const Surface<D>& unitSource, const Surface<D>& unitTarget,
+                 const StillAnchorOptions& opts)
+{
+    checkSurface(unitSource, "source");
+    checkSurface(unitTarget, "target");
+    if (!(opts.tolerance >= 0) || !std::isfinite(opts.tolerance)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "findStillAnchors: tolerance must be finite and >= 0, got "
+                          << opts.tolerance);
+    }
+    if (!(opts.radius >= 0) || !std::isfinite(opts.radius)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "findStillAnchors: radius must be finite and >= 0, got " << opts.radius);
+    }
+    StillAnchors<D> out;
+    out.level = opts.level > 0 ? opts.level
+                               : (D == 3 ? StillAnchorOptions::DEFAULT_LEVEL_3D
+                                         : StillAnchorOptions::DEFAULT_LEVEL_2D);
+    const double h = std::ldexp(1.0, -out.level);
+    // The band must reach the tolerance: at least 3 voxels (distanceBand's minimum).
+    const double halfWidth =
+        std::max(MIN_DISTANCE_HALF_WIDTH_VOXELS, std::ceil(opts.tolerance / h) + 2.0);
+    const openvdb::FloatGrid::Ptr d2 =
+        distanceBand<D>(unitTarget, out.level, halfWidth, opts.threaded);
+
+    const std::vector<Vec<D>>& x = unitSource.points;
+    out.vertices = x.size();
+    std::vector<char> on(x.size(), 0);
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        on[i] = std::abs(interpolated<D>(*d2, h, x[i])) <= opts.tolerance;
+        out.onTarget += std::size_t(on[i]);
+    }
+    // Erode the vertices on M2 by the radius: drop those with a vertex off M2 within it.
+    const double cell = std::max(opts.radius, 1e-6);
+    PointHash<D> off(x, cell);
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (!on[i]) off.insert(i);
+    std::vector<std::size_t> coincident;
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (on[i] && !off.anyWithin(x[i], opts.radius)) coincident.push_back(i);
+    out.coincident = coincident.size();
+    if (coincident.empty() || opts.count == 0) return out;
+
+    // Farthest-point sampling from the coincident vertex of lowest index; ties to the lowest.
+    std::vector<double> nearest(coincident.size(), std::numeric_limits<double>::infinity());
+    std::size_t next = 0;
+    while (out.points.size() < std::min(opts.count, coincident.size())) {
+        const Vec<D> p = x[coincident[next]];
+        out.points.push_back(p);
+        std::size_t best = 0;
+        double bestDistance = -1;
+        for (std::size_t k = 0; k < coincident.size(); ++k) {
+            nearest[k] = std::min(nearest[k], (x[coincident[k]] - p).squaredNorm());
+            if (nearest[k] > bestDistance) {
+                bestDistance = nearest[k];
+                best = k;
+            }
+        }
+        if (!(bestDistance > 0)) break; // every coincident vertex is already an anchor
+        next = best;
+    }
+    return out;
+}
+
+template StillAnchors<2> findStillAnchors<2>(const Surface<2>&, const Surface<2>&,
+                                             const StillAnchorOptions&);
+template StillAnchors<3> findStillAnchors<3>(const Surface<3>&, const Surface<3>&,
+                                             const StillAnchorOptions&);
+
+} // namespace vdbmatch
