@@ -310,6 +310,11 @@ TEST(Match, AutomaticLandmarksFollowAStarTurnedFar)
     EXPECT_EQ(guided.autoLandmarks.source.size(), arms.size());
     EXPECT_EQ(guided.autoLandmarks.lastLevel, 5);
     EXPECT_FALSE(free.autoLandmarks.requested);
+    // Every arm moves: no extremity stays, so no anchors, although the turned star coincides with
+    // the star on its round middle and where its arms overlap the others (a turn slides them).
+    EXPECT_TRUE(guided.autoLandmarks.anchors.empty());
+    EXPECT_NE(guided.autoLandmarks.anchorReason.find("every extremity moves"), std::string::npos)
+        << guided.autoLandmarks.anchorReason;
     // Mean distance of phi(v) to v's true image, against the mean motion of the vertices.
     const Eigen::Rotation2D<Real> rotate(turn);
     const auto error = [&](const MatchResult<2>& r) {

@@ -16,6 +16,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace vdbmatch {
@@ -112,6 +113,7 @@ MatchOptions::paper(int dim)
     opts.multiscale.surfaceFromLevel = DEFAULT_MATCH_SURFACE_FROM_LEVEL;
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
+    opts.anchorWeight = dim == 2 ? DEFAULT_ANCHOR_WEIGHT_2D : DEFAULT_ANCHOR_WEIGHT_3D;
     return opts;
 }
 
@@ -332,11 +334,23 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.source.push_back(wa);
         out.target.push_back(wb);
     }
-    if (opts.autoAnchors) {
+    // Anchors only when some extremity stays: the motion is then articulated, and what coincides
+    // in both shapes kept its place. When every extremity moves (a turn of the whole shape), a
+    // coinciding part may have slid along itself (a disc turning), and holding it would be wrong.
+    double leastMotion = std::numeric_limits<double>::infinity();
+    for (const auto& [i, j] : pairing.pairs)
+        leastMotion = std::min(leastMotion, (a.points[i] - b.points[j]).norm());
+    if (opts.autoAnchors && !(leastMotion <= opts.anchorOptions.radius)) {
+        std::ostringstream s;
+        s << "every extremity moves (the least by " << leastMotion << " > the anchor radius "
+          << opts.anchorOptions.radius << ", unit box)";
+        out.anchorReason = s.str();
+    } else if (opts.autoAnchors) {
         StillAnchorOptions ao = opts.anchorOptions;
         ao.threaded = opts.threaded;
         const StillAnchors<D> anchors = findStillAnchors<D>(unitSource, unitTarget, ao);
         out.anchorCoincidentShare = anchors.coincidentShare();
+        if (anchors.points.empty()) out.anchorReason = "the shapes coincide nowhere";
         for (const Vec<D>& p : anchors.points) {
             openvdb::Vec3d w = world(p);
             if (D == 2) w[2] = 0;

@@ -64,8 +64,10 @@ namespace vdbmatch {
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 /// Default c_lm of the landmark term (energy/LandmarkTerm.h): docs/numerics.md "Landmarks".
 constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
-/// Default c_an, the total weight of the automatic anchors (MatchOptions::anchorWeight).
-constexpr double DEFAULT_ANCHOR_WEIGHT = 1000;
+/// Default c_an, the total weight of the automatic anchors (MatchOptions::anchorWeight), in 2D
+/// and 3D: docs/numerics.md "Automatic anchors".
+constexpr double DEFAULT_ANCHOR_WEIGHT_2D = 1000;
+constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 10000;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
@@ -201,8 +203,8 @@ struct MatchOptions
     /// left in place stays, instead of sliding along its own surface toward the moving limb.
     /// On in defaults(), off in paper().
     bool autoAnchors = false;
-    StillAnchorOptions anchorOptions;            ///< tolerance, radius and count (Omega units)
-    double anchorWeight = DEFAULT_ANCHOR_WEIGHT; ///< c_an >= 0, Omega units
+    StillAnchorOptions anchorOptions;               ///< tolerance, radius and count (Omega units)
+    double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -263,8 +265,11 @@ struct AutoLandmarkSummary
     std::vector<openvdb::Vec3d> source, target;
     int lastLevel = 0; ///< the landmarks act at the levels up to this one
     /// Automatic anchors (MatchOptions::autoAnchors), world units (2D: z = 0); they act at
-    /// every level. Empty when not requested, not used, or M1 and M2 coincide nowhere.
+    /// every level. Empty when not requested, when the landmarks do not act, when no extremity
+    /// stays (no pair closer than the anchor radius: a turn of the whole shape), or when M1 and
+    /// M2 coincide nowhere (anchorReason says which of the last two).
     std::vector<openvdb::Vec3d> anchors;
+    std::string anchorReason;
     double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare()
     double seconds = 0;
 };

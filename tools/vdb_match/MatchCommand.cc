@@ -97,8 +97,8 @@ struct MatchCliOptions
     std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
     int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
     double autoLandmarkMinMotion = MatchOptions::defaults(3).autoLandmarkMinMotion;
-    std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
-    double anchorWeight = DEFAULT_ANCHOR_WEIGHT;
+    std::optional<bool> autoAnchors;    ///< --auto-anchors on|off (default per preset)
+    std::optional<double> anchorWeight; ///< --anchor-weight (default per dimension)
     StillAnchorOptions anchorOptions;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
     bool writeInverse = true;       ///< inverse.vdb
@@ -122,10 +122,11 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
            fixed("%.3g", a.maxMotion) + " > " + fixed("%.3g", a.minMotion) +
            " of the unit box), acting at levels " + std::to_string(firstLevel) + ".." +
            std::to_string(a.lastLevel) +
-           (a.anchors.empty() ? std::string()
-                              : ", with " + std::to_string(a.anchors.size()) +
-                                    " still anchors at every level (M1 and M2 coincide on " +
-                                    fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of M1)");
+           (a.anchors.empty()
+                ? (a.anchorReason.empty() ? std::string() : "; no anchors: " + a.anchorReason)
+                : ", with " + std::to_string(a.anchors.size()) +
+                      " still anchors at every level (M1 and M2 coincide on " +
+                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of M1)");
 }
 
 std::vector<Option<MatchCliOptions>>
@@ -324,7 +325,8 @@ matchOptionTable()
              o.autoLandmarkMinMotion = parseDouble("--auto-landmark-min-motion", v);
          }},
         {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
-         "when the automatic landmarks act: hold still, at every level, up to --anchor-count "
+         "when the automatic landmarks act and some extremity stays: hold still, at every level, "
+         "up to --anchor-count "
          "points of M1 around which M2 coincides with it (what the large motion left in place; "
          "docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
@@ -336,7 +338,7 @@ matchOptionTable()
          }},
         {"--anchor-weight", "X", "Landmarks (an addition to the paper)",
          "c_an, the total weight of the automatic anchors, >= 0 (default " +
-             formatNumber(d.anchorWeight) + ")",
+             both(DEFAULT_ANCHOR_WEIGHT_3D, DEFAULT_ANCHOR_WEIGHT_2D) + ")",
          [](O& o, const std::string& v) { o.anchorWeight = parseDouble("--anchor-weight", v); }},
         {"--anchor-count", "N", "Landmarks (an addition to the paper)",
          "most automatic anchors, farthest-point samples of where M1 and M2 coincide, >= 1 "
@@ -346,15 +348,15 @@ matchOptionTable()
              if (n < 1) throw UsageError("--anchor-count must be >= 1, got " + v);
              o.anchorOptions.count = std::size_t(n);
          }},
-        {"--anchor-radius", "R", "Landmarks (an addition to the paper)",
-         "M1 and M2 coincide around a point when every vertex of M1 within R of it is within "
+        {"--anchor-radius", "X", "Landmarks (an addition to the paper)",
+         "M1 and M2 coincide around a point when every vertex of M1 within X of it is within "
          "--anchor-tolerance of M2; unit-box lengths (default " +
              formatNumber(d.anchorOptions.radius) + ")",
          [](O& o, const std::string& v) {
              o.anchorOptions.radius = parseDouble("--anchor-radius", v);
          }},
-        {"--anchor-tolerance", "T", "Landmarks (an addition to the paper)",
-         "a vertex of M1 is on M2 when |d2| <= T; unit-box lengths (default " +
+        {"--anchor-tolerance", "X", "Landmarks (an addition to the paper)",
+         "a vertex of M1 is on M2 when |d2| <= X; unit-box lengths (default " +
              formatNumber(d.anchorOptions.tolerance) + ")",
          [](O& o, const std::string& v) {
              o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);
@@ -807,20 +809,22 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
             pairs.push_back(
                 Json{{"source", jsonVec(a.source[k])}, {"target", jsonVec(a.target[k])}});
         }
-        j["autoLandmarks"] = Json{{"used", a.used},
-                                  {"reason", a.used ? Json() : Json(a.reason)},
-                                  {"sourceExtremities", a.sourceExtremities},
-                                  {"targetExtremities", a.targetExtremities},
-                                  {"paired", a.paired},
-                                  {"maxMotion", a.maxMotion},
-                                  {"minMotion", a.minMotion},
-                                  {"distortion", a.distortion},
-                                  {"candidates", a.candidates},
-                                  {"lastLevel", a.lastLevel},
-                                  {"pairs", pairs},
-                                  {"anchors", a.anchors.size()},
-                                  {"anchorCoincidentShare", a.anchorCoincidentShare},
-                                  {"seconds", a.seconds}};
+        j["autoLandmarks"] =
+            Json{{"used", a.used},
+                 {"reason", a.used ? Json() : Json(a.reason)},
+                 {"sourceExtremities", a.sourceExtremities},
+                 {"targetExtremities", a.targetExtremities},
+                 {"paired", a.paired},
+                 {"maxMotion", a.maxMotion},
+                 {"minMotion", a.minMotion},
+                 {"distortion", a.distortion},
+                 {"candidates", a.candidates},
+                 {"lastLevel", a.lastLevel},
+                 {"pairs", pairs},
+                 {"anchors", a.anchors.size()},
+                 {"anchorCoincidentShare", a.anchorCoincidentShare},
+                 {"anchorReason", a.anchorReason.empty() ? Json() : Json(a.anchorReason)},
+                 {"seconds", a.seconds}};
         if (a.used) {
             j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
             j["autoLandmarks"]["meanWorld"] = r.landmarks.meanWorld;
@@ -972,7 +976,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.autoLandmarkLevels = o.autoLandmarkLevels;
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
-    opts.anchorWeight = o.anchorWeight;
+    if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
     opts.anchorOptions = o.anchorOptions;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
