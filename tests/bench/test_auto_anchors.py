@@ -13,24 +13,12 @@ import numpy as np
 import pytest
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-MAKE_PAIRS = os.path.join(HERE, "..", "..", "bench", "accuracy", "make_pairs.py")
+ACCURACY = os.path.join(HERE, "..", "..", "bench", "accuracy")
+MAKE_PAIRS = os.path.join(ACCURACY, "make_pairs.py")
+sys.path.insert(0, ACCURACY)
+from score import read_points  # noqa: E402  (bench/accuracy/score.py)
+
 PAIR = "figure_arms_horizontal"
-
-
-def points(path):
-    """x, y of the vertices of a vdbmatch polyline, an OBJ or a truth.xyz table."""
-    out = []
-    with open(path) as f:
-        for line in f:
-            s = line.split("#")[0].split()
-            if not s:
-                continue
-            if s[0] == "v":
-                s = s[1:]
-            elif not s[0][0].isdigit() and s[0][0] not in "+-.":
-                continue  # other OBJ records (l, f, ...)
-            out.append([float(s[0]), float(s[1])])
-    return np.array(out)
 
 
 @pytest.fixture(scope="module")
@@ -56,7 +44,8 @@ def errors(pair, run):
     """|phi(v) - g(v)| over the source's vertices and the mask of those g keeps still, unit box."""
     report = json.load(open(run / "report.json"))
     scale = report["placement"]["scale"]
-    v, g, phi = points(pair / "source.polyline"), points(pair / "truth.xyz"), points(run / "deformed.obj")
+    v, g, phi = (read_points(str(p), 2) for p in
+                 (pair / "source.polyline", pair / "truth.xyz", run / "deformed.obj"))
     assert len(v) == len(g) == len(phi)
     still = np.linalg.norm(g - v, axis=1) * scale < 5e-3
     return np.linalg.norm(phi - g, axis=1) * scale, still, report

@@ -3,6 +3,7 @@
 
 #include <openvdb/Exceptions.h>
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Interpolation.h>
 
 #include <array>
 #include <cmath>
@@ -13,34 +14,6 @@
 namespace vdbmatch {
 
 namespace {
-
-/// d2 at @a x (Omega units) by (bi/tri)linear interpolation of the band's node values; off the
-/// band, its inactive values (+-background).
-template <int D>
-double
-interpolated(const openvdb::FloatGrid& grid, double h, const Vec<D>& x)
-{
-    const auto acc = grid.getConstAccessor();
-    std::array<int, 3> base{0, 0, 0};
-    std::array<double, 3> t{0, 0, 0};
-    for (int a = 0; a < D; ++a) {
-        const double s = x[a] / h;
-        base[a] = int(std::floor(s));
-        t[a] = s - base[a];
-    }
-    double value = 0;
-    for (int corner = 0; corner < (1 << D); ++corner) {
-        double w = 1;
-        openvdb::Coord ijk(base[0], base[1], base[2]);
-        for (int a = 0; a < D; ++a) {
-            const int bit = (corner >> a) & 1;
-            ijk[a] += bit;
-            w *= bit ? t[a] : 1 - t[a];
-        }
-        if (w != 0) value += w * double(acc.getValue(ijk));
-    }
-    return value;
-}
 
 /// Cells of side @a cell holding point indices, for "is any point within r" queries.
 template <int D> class PointHash
@@ -123,8 +96,14 @@ findStillAnchors(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     const std::vector<Vec<D>>& x = unitSource.points;
     out.vertices = x.size();
     std::vector<char> on(x.size(), 0);
+    // d2 at the vertices: trilinear in the band's index space (2D: on its layer k = 0, where
+    // the weight of layer 1 is zero); off the band, its inactive values (+-background).
+    const auto acc = d2->getConstAccessor();
     for (std::size_t i = 0; i < x.size(); ++i) {
-        on[i] = std::abs(interpolated<D>(*d2, h, x[i])) <= opts.tolerance;
+        const openvdb::Vec3d p(x[i][0] / h, x[i][1] / h, D == 3 ? x[i][D - 1] / h : 0.0);
+        float d = 0;
+        openvdb::tools::BoxSampler::sample(acc, p, d);
+        on[i] = std::abs(double(d)) <= opts.tolerance;
         out.onTarget += std::size_t(on[i]);
     }
     // Erode the vertices on M2 by the radius: drop those with a vertex off M2 within it.
