@@ -563,16 +563,16 @@ SHARP_CUT = 0.004  # width of the one-sided weights of the large-motion figure p
 
 def spread_legs(hip_degrees, knee_degrees=0.0):
     """Both legs swung out by `hip_degrees` at the hips (mirror-symmetric), then, if
-    `knee_degrees`, both shins turned back in by it at the (moved) knees. The weight is cut off
-    sharply (SHARP_CUT) in the gap between the legs (the leg's inner surface is at ~0.09 from its
-    axis, the other leg at ~0.12), so that each leg turns whole."""
+    `knee_degrees`, both shins turned back in by it at the (moved) knees. Each leg turns whole:
+    the swing's weight is cut off sharply (SHARP_CUT) at the body's mid-line x = 0, the middle of
+    the gap between the legs at every height. (Until 2026-11-27 the cut lay at a lateral distance
+    0.105 from the hip-knee axis: in the gap at the thigh, but through the inner edge of the foot,
+    which then stayed while the rest of the leg swung, stretching 0.045 of the outline ~10x.)"""
     maps = []
     for side in (+1, -1):
         flip = (lambda p: p) if side > 0 else mirror
         hip, knee, ankle = flip(HIP), flip(KNEE), flip(ANKLE)
-        swing = limb_rotation(hip, knee - hip, side * hip_degrees, start=0.10, ramp=0.03,
-                              lateral=lambda l, s=side: one_sided(-s * 0.105, SHARP_CUT, s)(l)
-                              * window(0.22)(l))
+        swing = leg_swing(hip, knee, side * hip_degrees, side)
         maps.append(swing)
         if knee_degrees:
             k, a = swing(knee[None, :])[0], swing(ankle[None, :])[0]
@@ -580,6 +580,20 @@ def spread_legs(hip_degrees, knee_degrees=0.0):
                 k, a - k, -side * knee_degrees, start=0.02, ramp=0.025,
                 lateral=lambda l, s=side: one_sided(-s * 0.11, SHARP_CUT, s)(l) * window(0.25)(l)))
     return compose(*maps)
+
+
+def leg_swing(hip, knee, degrees, side):
+    """rotation_flow of the leg on side `side` (+1: x > 0) about `hip`: weight
+    logistic((s - 0.10)/0.03) along the hip-knee axis, times a sharp cut at the mid-line x = 0
+    of the rest frame, times a lateral window on the outer side (half-width 0.22)."""
+    d = (knee - hip) / np.linalg.norm(knee - hip)
+    lat_dir = perp2(d)
+
+    def weight(back):
+        mid = one_sided(0.0, SHARP_CUT, side)(back[:, 0] + hip[0])
+        return logistic((back @ d - 0.10) / 0.03) * mid * window(0.22)(back @ lat_dir)
+
+    return rotation_flow(hip, degrees, weight)
 
 
 def figure_arms_horizontal():
