@@ -334,6 +334,63 @@ TEST(Match, AutomaticLandmarksFollowAStarTurnedFar)
     EXPECT_LT(guided.residual.meanWorld, halfCell);
 }
 
+TEST(Match, AnchorsOnlyForAnArticulation)
+{
+    // The automatic anchors hold still where M1 and M2 coincide, which is right when the motion
+    // is an articulation (some extremity stays while another moves) and wrong when everything
+    // moved alike (a twist, a turn: the coinciding parts slid along themselves). A five-armed
+    // star with one arm turned by 30 degrees about the centre is an articulation; the whole star
+    // turned by 8 degrees moves every arm's end alike (by 0.55-1 times the most, the arms'
+    // lengths), yet within the anchor radius.
+    const std::vector<double> arms{0.40, 0.22, 0.34, 0.28, 0.38};
+    const auto star = [&](const std::vector<double>& angles) {
+        std::vector<Vec<2>> corners;
+        const std::size_t n = arms.size();
+        for (std::size_t k = 0; k < n; ++k) {
+            const double a = angles[k],
+                         b = 0.5 * (a + angles[(k + 1) % n] + (k + 1 == n ? 2 * M_PI : 0));
+            corners.push_back(arms[k] * Vec<2>(std::cos(a), std::sin(a)));
+            corners.push_back(0.09 * Vec<2>(std::cos(b), std::sin(b)));
+        }
+        Surface<2> s;
+        for (std::size_t c = 0; c < corners.size(); ++c)
+            for (int i = 0; i < 24; ++i)
+                s.points.push_back(corners[c] + (corners[(c + 1) % corners.size()] - corners[c]) *
+                                                    (double(i) / 24));
+        for (int i = 0; i < int(s.points.size()); ++i)
+            s.elements.push_back({int32_t(i), int32_t((i + 1) % int(s.points.size()))});
+        return s;
+    };
+    std::vector<double> rest(arms.size());
+    for (std::size_t k = 0; k < arms.size(); ++k)
+        rest[k] = 0.3 + 2 * M_PI * double(k) / double(arms.size());
+    std::vector<double> oneArm = rest, turned = rest;
+    oneArm[0] += 30 * M_PI / 180;
+    for (double& a : turned)
+        a += 8 * M_PI / 180;
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 5;
+    const Surface<2> a = star(rest);
+    for (const bool articulated : {true, false}) {
+        const Surface<2> b = star(articulated ? oneArm : turned);
+        const UnitBoxPlacement placement = placeInUnitBox(a, b, opts.margin);
+        const MatchResult<2> r = match<2>(a, b, placement, opts);
+        ASSERT_TRUE(r.isComplete());
+        const AutoLandmarkSummary& s = r.autoLandmarks;
+        ASSERT_TRUE(s.used) << s.reason; // acting whenever paired (autoLandmarkMinMotion 0)
+        if (articulated) {
+            EXPECT_GT(s.anchors.size(), 10u) << s.anchorReason;
+            EXPECT_TRUE(s.anchorReason.empty()) << s.anchorReason;
+        } else {
+            EXPECT_TRUE(s.anchors.empty());
+            EXPECT_NE(s.anchorReason.find("move alike"), std::string::npos) << s.anchorReason;
+            EXPECT_EQ(s.anchorReason.find("every extremity moves"), std::string::npos)
+                << s.anchorReason; // within the anchor radius: the ratio decides
+        }
+    }
+}
+
 TEST(Match, LandmarksTurnACircleNoShapeEnergyCanTell)
 {
     // A circle onto itself: every rotation about its centre matches the shape equally well, so

@@ -334,9 +334,10 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.source.push_back(wa);
         out.target.push_back(wb);
     }
-    // Anchors only when some extremity stays: the motion is then articulated, and what coincides
-    // in both shapes kept its place. When every extremity moves (a turn of the whole shape), a
-    // coinciding part may have slid along itself (a disc turning), and holding it would be wrong.
+    // Anchors only when some extremity stays while another moves (ANCHOR_STILL_RATIO): the
+    // motion is then articulated, and what coincides in both shapes kept its place. When every
+    // extremity moves (a turn of the whole shape), or all move alike (a twist of the body), a
+    // coinciding part may have slid along itself, and holding it would be wrong.
     double leastMotion = std::numeric_limits<double>::infinity();
     for (const auto& [i, j] : pairing.pairs)
         leastMotion = std::min(leastMotion, (a.points[i] - b.points[j]).norm());
@@ -344,6 +345,11 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         std::ostringstream s;
         s << "every extremity moves (the least by " << leastMotion << " > the anchor radius "
           << opts.anchorOptions.radius << ", unit box)";
+        out.anchorReason = s.str();
+    } else if (opts.autoAnchors && !(leastMotion <= ANCHOR_STILL_RATIO * out.maxMotion)) {
+        std::ostringstream s;
+        s << "the extremities move alike (the least by " << leastMotion << ", the most by "
+          << out.maxMotion << ", unit box: a twist or a turn, not an articulation)";
         out.anchorReason = s.str();
     } else if (opts.autoAnchors) {
         StillAnchorOptions ao = opts.anchorOptions;

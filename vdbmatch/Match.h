@@ -68,6 +68,12 @@ constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
 /// and 3D: docs/numerics.md "Automatic anchors".
 constexpr double DEFAULT_ANCHOR_WEIGHT_2D = 1000;
 constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 10000;
+/// The automatic anchors act only when the motion is an articulation: some extremity stays (its
+/// pair lies within the anchor radius) and moves at most this fraction of the extremity that
+/// moves most. Extremities that all move alike (a twist of the body, a turn of the whole shape)
+/// leave coinciding parts that may have slid along themselves: docs/numerics.md "Automatic
+/// anchors".
+constexpr double ANCHOR_STILL_RATIO = 0.5;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
@@ -194,14 +200,16 @@ struct MatchOptions
     /// Levels, from the first, at which the automatic landmarks act (>= 1).
     int autoLandmarkLevels = 2;
     /// The automatic landmarks act only when some pair lies farther apart than this many sigma
-    /// of the first level (>= 0; 0: always): a smaller motion the shape energy sees by itself.
-    double autoLandmarkMinMotion = 1;
+    /// of the first level (>= 0; 0, the default: whenever the extremities are paired). Until
+    /// 2026-11-27 it was 1: a smaller motion was left to the shape energy, which the benchmark's
+    /// legs spread 25 degrees (0.997 sigma) showed to be fragile (docs/numerics.md).
+    double autoLandmarkMinMotion = 0;
     /// Automatic anchors, an addition to the paper (docs/numerics.md "Automatic anchors"): when
-    /// the automatic landmarks act, points of M1 around which M2 coincides with it
-    /// (geometry/StillAnchors.h) are held still, phi(x) = x, by a soft term of total weight
-    /// anchorWeight (each anchor anchorWeight / count) at every level: what the large motion
-    /// left in place stays, instead of sliding along its own surface toward the moving limb.
-    /// On in defaults(), off in paper().
+    /// the automatic landmarks act and the motion is an articulation (ANCHOR_STILL_RATIO),
+    /// points of M1 around which M2 coincides with it (geometry/StillAnchors.h) are held still,
+    /// phi(x) = x, by a soft term of total weight anchorWeight (each anchor anchorWeight / count)
+    /// at every level: what the motion left in place stays, instead of sliding along its own
+    /// surface toward the moving limb. On in defaults(), off in paper().
     bool autoAnchors = false;
     StillAnchorOptions anchorOptions;               ///< tolerance, radius and count (Omega units)
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))

@@ -321,28 +321,32 @@ L = lm["landmarks"]
 assert L["count"] == 3 and L["source"].endswith("lm_a.csv") and L["target"].endswith("lm_b.csv"), L
 assert L["meanWorld"] < 0.5 * L["startMeanWorld"], L
 assert lm["parameters"]["landmarks"] == [L["source"], L["target"]]
-assert lm["result"]["terms"]["landmarks"] > 0 and plain["result"]["terms"]["landmarks"] == 0
+assert lm["result"]["terms"]["landmarks"] > 0
+# Given landmarks replace the automatic ones; by default the finest level's landmark term is
+# that of the automatic anchors (the automatic landmarks act at levels 4..5 only).
+assert "autoLandmarks" not in lm and plain["autoLandmarks"]["used"], plain["autoLandmarks"]
+assert (plain["result"]["terms"]["landmarks"] > 0) == (plain["autoLandmarks"]["anchors"] > 0)
 assert "landmarks" not in plain and "landmarks" not in plain["parameters"]
 assert lm["result"]["residual"]["meanUnit"] < lm["levels"][-1]["h"] / 2
 assert again["landmarks"] == L and again["result"]["energy"] == lm["result"]["energy"], again["landmarks"]
 PY
     # Automatic landmarks: the figures' five extremities (head, hands, feet), paired, act at
-    # the first two levels only; the reverse run pairs the same points the other way. The
-    # bundled pair moves its extremities by less than sigma of level 4: by default the
-    # landmarks do not act (the result is that of --auto-landmarks off), with
-    # --auto-landmark-min-motion 0 they do.
+    # the first two levels only (by default whenever paired); the reverse run pairs the same
+    # points the other way. The bundled pair moves its extremities by less than sigma of
+    # level 4: with --auto-landmark-min-motion 1 the landmarks do not act (the result is that
+    # of --auto-landmarks off).
     check auto-landmarks-bad 1 '' "--auto-landmarks expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks yes --quiet
     check auto-landmark-levels-bad 3 '' 'autoLandmarkLevels must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-levels 0 --quiet
     check auto-landmark-min-motion-bad 3 '' 'autoLandmarkMinMotion must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-landmarks on --auto-landmark-min-motion -1 --quiet
-    check match-2d-auto-landmarks-small 0 'automatic landmarks: not used: every extremity moves by less than 1 sigma' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2g" --levels 4..6
+    check match-2d-auto-landmarks-small 0 'automatic landmarks: not used: every extremity moves by less than 1 sigma' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2g" --levels 4..6 --auto-landmark-min-motion 1
     check match-2d-auto-landmarks-off 0 'converged|not converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2o" --levels 4..6 --auto-landmarks off
-    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired .*, with [0-9]+ still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
-    check match-2d-auto-landmarks-no-anchors 0 'automatic landmarks: 5 extremities paired \(distortion [0-9.]*, largest motion [0-9.e-]* > 0 of the unit box\), acting at levels 4..5$' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2n" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0 --auto-anchors off
+    check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired .*, with [0-9]+ still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6
+    check match-2d-auto-landmarks-no-anchors 0 'automatic landmarks: 5 extremities paired \(distortion [0-9.]*, largest motion [0-9.e-]* > 0 of the unit box\), acting at levels 4..5$' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2n" --levels 4..6 --auto-anchors off
     check auto-anchors-bad 1 '' "--auto-anchors expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-anchors 1 --quiet
     check anchor-count-bad 1 '' '--anchor-count must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-count 0 --quiet
     check anchor-weight-bad 3 '' 'anchorWeight must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-weight -1 --quiet
     check anchor-radius-bad 3 '' 'the anchor tolerance and radius must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-radius -0.1 --quiet
-    check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6 --auto-landmarks on --auto-landmark-min-motion 0
+    check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     count=$((count + 1))
     if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" "$SCRATCH/m2n" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
@@ -368,7 +372,8 @@ assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorC
 assert 0 < A["anchors"] <= 100 and 0 < A["anchorCoincidentShare"] < 1, A
 terms = [l["terms"]["landmarks"] for l in auto["levels"]]
 assert all(t > 0 for t in terms), terms
-assert small["autoLandmarks"]["anchors"] == 0  # no large motion: no landmarks, no anchors
+assert small["autoLandmarks"]["anchors"] == 0  # no landmarks, no anchors
+assert small["parameters"]["autoLandmarkMinMotion"] == 1 and auto["parameters"]["autoLandmarkMinMotion"] == 0
 # Off: not reported; a config of the run reproduces it.
 assert "autoLandmarks" not in plain and plain["parameters"]["autoLandmarks"] == "off"
 assert again["autoLandmarks"] == dict(A, seconds=again["autoLandmarks"]["seconds"])

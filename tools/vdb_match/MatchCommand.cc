@@ -320,14 +320,15 @@ matchOptionTable()
          }},
         {"--auto-landmark-min-motion", "X", "Landmarks (an addition to the paper)",
          "the automatic landmarks act only when some extremity moves farther than X sigma of the "
-         "first level, >= 0; 0: always (default " + formatNumber(d.autoLandmarkMinMotion) + ")",
+         "first level, >= 0; 0: whenever the extremities are paired (default " +
+             formatNumber(d.autoLandmarkMinMotion) + ")",
          [](O& o, const std::string& v) {
              o.autoLandmarkMinMotion = parseDouble("--auto-landmark-min-motion", v);
          }},
         {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
-         "when the automatic landmarks act and some extremity stays: hold still, at every level, "
-         "up to --anchor-count "
-         "points of M1 around which M2 coincides with it (what the large motion left in place; "
+         "when the automatic landmarks act and some extremity stays while another moves (at "
+         "least twice as far): hold still, at every level, up to --anchor-count points of M1 "
+         "around which M2 coincides with it (what the articulation left in place; "
          "docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
              "; --preset paper: off)",

@@ -1,6 +1,6 @@
 /// @file StillAnchors.h
 /// @brief Where two shapes coincide: points of M1 around which M2 lies on M1, for the automatic
-///        anchors that hold still what a large motion leaves in place (an addition to the paper,
+///        anchors that hold still what an articulation leaves in place (an addition to the paper,
 ///        whose energy has no landmarks; docs/numerics.md "Automatic anchors").
 ///
 /// Where M1 and M2 coincide, the distances d1 and d2 cannot tell a tangential slide from no
@@ -15,8 +15,9 @@
 ///    coincident vertex of lowest index), spread over the coincident region.
 /// This holds for articulated motion (the body stays while limbs move) and fails for a
 /// tangential motion of a surface that keeps its shape (a cylinder twisting about its axis, a
-/// disc turning), which is why match() uses the anchors only when the automatic landmarks
-/// detected a large motion. The result does not depend on the thread count.
+/// disc turning), which is why match() uses the anchors only when the paired extremities show
+/// an articulation: some stays while another moves (ANCHOR_STILL_RATIO in Match.h). The result
+/// does not depend on the thread count.
 #pragma once
 
 #include <vdbmatch/Types.h>
