@@ -311,8 +311,12 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     out.paired = true;
     out.distortion = pairing.distortion;
     out.candidates = pairing.candidates;
-    for (const auto& [i, j] : pairing.pairs)
-        out.maxMotion = std::max(out.maxMotion, (a.points[i] - b.points[j]).norm());
+    double leastMotion = std::numeric_limits<double>::infinity(); // for the anchors, below
+    for (const auto& [i, j] : pairing.pairs) {
+        const double motion = (a.points[i] - b.points[j]).norm();
+        out.maxMotion = std::max(out.maxMotion, motion);
+        leastMotion = std::min(leastMotion, motion);
+    }
     out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energy.sigmaFactor *
                     std::ldexp(1.0, -opts.multiscale.minLevel);
     if (!(out.maxMotion > out.minMotion)) {
@@ -338,9 +342,6 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     // motion is then articulated, and what coincides in both shapes kept its place. When every
     // extremity moves (a turn of the whole shape), or all move alike (a twist of the body), a
     // coinciding part may have slid along itself, and holding it would be wrong.
-    double leastMotion = std::numeric_limits<double>::infinity();
-    for (const auto& [i, j] : pairing.pairs)
-        leastMotion = std::min(leastMotion, (a.points[i] - b.points[j]).norm());
     if (opts.autoAnchors && !(leastMotion <= opts.anchorOptions.radius)) {
         std::ostringstream s;
         s << "every extremity moves (the least by " << leastMotion << " > the anchor radius "

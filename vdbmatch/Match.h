@@ -274,8 +274,9 @@ struct AutoLandmarkSummary
     int lastLevel = 0; ///< the landmarks act at the levels up to this one
     /// Automatic anchors (MatchOptions::autoAnchors), world units (2D: z = 0); they act at
     /// every level. Empty when not requested, when the landmarks do not act, when no extremity
-    /// stays (no pair closer than the anchor radius: a turn of the whole shape), or when M1 and
-    /// M2 coincide nowhere (anchorReason says which of the last two).
+    /// stays (no pair closer than the anchor radius: a turn of the whole shape), when the
+    /// extremities move alike (ANCHOR_STILL_RATIO: a twist), or when M1 and M2 coincide nowhere
+    /// (anchorReason says which of the last three).
     std::vector<openvdb::Vec3d> anchors;
     std::string anchorReason;
     double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare()
