@@ -279,7 +279,7 @@ struct AutoLandmarkSummary
     /// (anchorReason says which of the last three).
     std::vector<openvdb::Vec3d> anchors;
     std::string anchorReason;
-    double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare()
+    double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare() (both shapes)
     double seconds = 0;
 };
 

@@ -126,7 +126,7 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                 ? (a.anchorReason.empty() ? std::string() : "; no anchors: " + a.anchorReason)
                 : ", with " + std::to_string(a.anchors.size()) +
                       " still anchors at every level (M1 and M2 coincide on " +
-                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of M1)");
+                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
 }
 
 std::vector<Option<MatchCliOptions>>
@@ -328,8 +328,8 @@ matchOptionTable()
         {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
          "when the automatic landmarks act and some extremity stays while another moves (at "
          "least twice as far): hold still, at every level, up to --anchor-count points of M1 "
-         "around which M2 coincides with it (what the articulation left in place; "
-         "docs/numerics.md) (default " +
+         "and M2 around which the other shape coincides (what the articulation left in place; "
+         "the same points either way round; docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
              "; --preset paper: off)",
          [](O& o, const std::string& v) {
@@ -350,14 +350,15 @@ matchOptionTable()
              o.anchorOptions.count = std::size_t(n);
          }},
         {"--anchor-radius", "X", "Landmarks (an addition to the paper)",
-         "M1 and M2 coincide around a point when every vertex of M1 within X of it is within "
-         "--anchor-tolerance of M2; unit-box lengths (default " +
+         "M1 and M2 coincide around a vertex when every vertex of its shape within X of it is "
+         "within --anchor-tolerance of the other shape; unit-box lengths (default " +
              formatNumber(d.anchorOptions.radius) + ")",
          [](O& o, const std::string& v) {
              o.anchorOptions.radius = parseDouble("--anchor-radius", v);
          }},
         {"--anchor-tolerance", "X", "Landmarks (an addition to the paper)",
-         "a vertex of M1 is on M2 when |d2| <= X; unit-box lengths (default " +
+         "a vertex of M1 is on M2 when |d2| <= X, one of M2 on M1 when |d1| <= X; unit-box "
+         "lengths (default " +
              formatNumber(d.anchorOptions.tolerance) + ")",
          [](O& o, const std::string& v) {
              o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);

@@ -4,7 +4,9 @@
 #include <openvdb/Exceptions.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
+#include <tbb/parallel_invoke.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -64,6 +66,42 @@ private:
     std::unordered_map<int64_t, std::vector<std::size_t>> mCells;
 };
 
+/// The vertices of @a self around which @a other coincides with it (steps 1 and 2 of the file
+/// comment), in index order.
+template <int D>
+std::vector<std::size_t>
+coincidentVertices(const Surface<D>& self, const Surface<D>& other, const StillAnchorOptions& opts,
+                   int level, std::size_t& onOther)
+{
+    const double h = std::ldexp(1.0, -level);
+    // The band must reach the tolerance: at least 3 voxels (distanceBand's minimum).
+    const double halfWidth =
+        std::max(MIN_DISTANCE_HALF_WIDTH_VOXELS, std::ceil(opts.tolerance / h) + 2.0);
+    const openvdb::FloatGrid::Ptr d = distanceBand<D>(other, level, halfWidth, opts.threaded);
+    const std::vector<Vec<D>>& x = self.points;
+    std::vector<char> on(x.size(), 0);
+    // The distance at the vertices: trilinear in the band's index space (2D: on its layer
+    // k = 0, where the weight of layer 1 is zero); off the band, its inactive values.
+    const auto acc = d->getConstAccessor();
+    for (std::size_t i = 0; i < x.size(); ++i) {
+        const openvdb::Vec3d p(x[i][0] / h, x[i][1] / h, D == 3 ? x[i][D - 1] / h : 0.0);
+        float v = 0;
+        openvdb::tools::BoxSampler::sample(acc, p, v);
+        on[i] = std::abs(double(v)) <= opts.tolerance;
+        onOther += std::size_t(on[i]);
+    }
+    // Erode the vertices on the other shape by the radius: drop those with a vertex off it
+    // within the radius.
+    const double cell = std::max(opts.radius, 1e-6);
+    PointHash<D> off(x, cell);
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (!on[i]) off.insert(i);
+    std::vector<std::size_t> out;
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (on[i] && !off.anyWithin(x[i], opts.radius)) out.push_back(i);
+    return out;
+}
+
 } // namespace
 
 template <int D>
@@ -86,53 +124,58 @@ findStillAnchors(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     out.level = opts.level > 0 ? opts.level
                                : (D == 3 ? StillAnchorOptions::DEFAULT_LEVEL_3D
                                          : StillAnchorOptions::DEFAULT_LEVEL_2D);
-    const double h = std::ldexp(1.0, -out.level);
-    // The band must reach the tolerance: at least 3 voxels (distanceBand's minimum).
-    const double halfWidth =
-        std::max(MIN_DISTANCE_HALF_WIDTH_VOXELS, std::ceil(opts.tolerance / h) + 2.0);
-    const openvdb::FloatGrid::Ptr d2 =
-        distanceBand<D>(unitTarget, out.level, halfWidth, opts.threaded);
-
-    const std::vector<Vec<D>>& x = unitSource.points;
-    out.vertices = x.size();
-    std::vector<char> on(x.size(), 0);
-    // d2 at the vertices: trilinear in the band's index space (2D: on its layer k = 0, where
-    // the weight of layer 1 is zero); off the band, its inactive values (+-background).
-    const auto acc = d2->getConstAccessor();
-    for (std::size_t i = 0; i < x.size(); ++i) {
-        const openvdb::Vec3d p(x[i][0] / h, x[i][1] / h, D == 3 ? x[i][D - 1] / h : 0.0);
-        float d = 0;
-        openvdb::tools::BoxSampler::sample(acc, p, d);
-        on[i] = std::abs(double(d)) <= opts.tolerance;
-        out.onTarget += std::size_t(on[i]);
+    // The coincident vertices of both shapes, each against the other: the anchors are then
+    // the same whichever shape is the source.
+    std::vector<std::size_t> sourceCoincident, targetCoincident;
+    std::size_t targetOnSource = 0;
+    const auto findSource = [&] {
+        sourceCoincident =
+            coincidentVertices(unitSource, unitTarget, opts, out.level, out.onTarget);
+    };
+    const auto findTarget = [&] {
+        targetCoincident =
+            coincidentVertices(unitTarget, unitSource, opts, out.level, targetOnSource);
+    };
+    if (opts.threaded) {
+        tbb::parallel_invoke(findSource, findTarget);
+    } else {
+        findSource();
+        findTarget();
     }
-    // Erode the vertices on M2 by the radius: drop those with a vertex off M2 within it.
-    const double cell = std::max(opts.radius, 1e-6);
-    PointHash<D> off(x, cell);
-    for (std::size_t i = 0; i < x.size(); ++i)
-        if (!on[i]) off.insert(i);
-    std::vector<std::size_t> coincident;
-    for (std::size_t i = 0; i < x.size(); ++i)
-        if (on[i] && !off.anyWithin(x[i], opts.radius)) coincident.push_back(i);
-    out.coincident = coincident.size();
-    if (coincident.empty() || opts.count == 0) return out;
+    out.coincident = sourceCoincident.size();
+    out.targetCoincident = targetCoincident.size();
+    std::vector<Vec<D>> candidates;
+    for (const std::size_t i : sourceCoincident)
+        candidates.push_back(unitSource.points[i]);
+    for (const std::size_t i : targetCoincident)
+        candidates.push_back(unitTarget.points[i]);
+    out.vertices = unitSource.points.size();
+    out.targetVertices = unitTarget.points.size();
+    if (candidates.empty() || opts.count == 0) return out;
 
-    // Farthest-point sampling from the coincident vertex of lowest index; ties to the lowest.
-    std::vector<double> nearest(coincident.size(), std::numeric_limits<double>::infinity());
+    // The same candidates, in the same order, whichever shape is the source: sorted by their
+    // coordinates (lexicographic; duplicates removed).
+    std::sort(candidates.begin(), candidates.end(), [](const Vec<D>& a, const Vec<D>& b) {
+        return std::lexicographical_compare(a.data(), a.data() + D, b.data(), b.data() + D);
+    });
+    candidates.erase(std::unique(candidates.begin(), candidates.end()), candidates.end());
+
+    // Farthest-point sampling from the first candidate; ties to the first.
+    std::vector<double> nearest(candidates.size(), std::numeric_limits<double>::infinity());
     std::size_t next = 0;
-    while (out.points.size() < std::min(opts.count, coincident.size())) {
-        const Vec<D> p = x[coincident[next]];
+    while (out.points.size() < std::min(opts.count, candidates.size())) {
+        const Vec<D> p = candidates[next];
         out.points.push_back(p);
         std::size_t best = 0;
         double bestDistance = -1;
-        for (std::size_t k = 0; k < coincident.size(); ++k) {
-            nearest[k] = std::min(nearest[k], (x[coincident[k]] - p).squaredNorm());
+        for (std::size_t k = 0; k < candidates.size(); ++k) {
+            nearest[k] = std::min(nearest[k], (candidates[k] - p).squaredNorm());
             if (nearest[k] > bestDistance) {
                 bestDistance = nearest[k];
                 best = k;
             }
         }
-        if (!(bestDistance > 0)) break; // every coincident vertex is already an anchor
+        if (!(bestDistance > 0)) break; // every candidate is already an anchor
         next = best;
     }
     return out;

@@ -1,7 +1,8 @@
 /// @file StillAnchors.h
-/// @brief Where two shapes coincide: points of M1 around which M2 lies on M1, for the automatic
-///        anchors that hold still what an articulation leaves in place (an addition to the paper,
-///        whose energy has no landmarks; docs/numerics.md "Automatic anchors").
+/// @brief Where two shapes coincide: points of M1 and M2 around which the other shape lies on
+///        them, for the automatic anchors that hold still what an articulation leaves in place
+///        (an addition to the paper, whose energy has no landmarks; docs/numerics.md "Automatic
+///        anchors").
 ///
 /// Where M1 and M2 coincide, the distances d1 and d2 cannot tell a tangential slide from no
 /// motion, and the convex stored energies of eq:EsymMem spread a limb's stretch over the still
@@ -11,8 +12,12 @@
 /// 2. it is *coincident* when every vertex of M1 within radius of it is on M2 (the set of
 ///    vertices on M2, eroded by radius), so the surfaces agree over a patch, not just where they
 ///    cross;
-/// 3. up to `count` of the coincident vertices are chosen by farthest-point sampling (from the
-///    coincident vertex of lowest index), spread over the coincident region.
+/// 3. the same for the vertices of M2 against M1 (d1), so that the anchors do not depend on
+///    which shape is the source: the match M2 -> M1 holds the same points as M1 -> M2, and two
+///    independent runs stay inverse to each other there;
+/// 4. up to `count` of the coincident vertices of both shapes are chosen by farthest-point
+///    sampling (in lexicographic order of their coordinates, from the first), spread over the
+///    coincident region.
 /// This holds for articulated motion (the body stays while limbs move) and fails for a
 /// tangential motion of a surface that keeps its shape (a cylinder twisting about its axis, a
 /// disc turning), which is why match() uses the anchors only when the paired extremities show
@@ -45,16 +50,19 @@ struct StillAnchorOptions
 /// The still anchors of one pair of shapes.
 template <int D> struct StillAnchors
 {
-    std::vector<Vec<D>> points; ///< anchors on M1, Omega units, in sampling order
-    std::size_t vertices = 0;   ///< vertices of M1
-    std::size_t onTarget = 0;   ///< ... within tolerance of M2
-    std::size_t coincident = 0; ///< ... whose whole radius-patch is within tolerance of M2
-    int level = 0;              ///< the level of M2's distance band
+    std::vector<Vec<D>> points;       ///< anchors on M1 and M2, Omega units, in sampling order
+    std::size_t vertices = 0;         ///< vertices of M1
+    std::size_t onTarget = 0;         ///< ... within tolerance of M2
+    std::size_t coincident = 0;       ///< ... whose whole radius-patch is within tolerance of M2
+    std::size_t targetVertices = 0;   ///< vertices of M2
+    std::size_t targetCoincident = 0; ///< ... whose whole radius-patch is within tolerance of M1
+    int level = 0;                    ///< the level of the distance bands
 
-    /// Share of M1's vertices that are coincident.
+    /// Share of the vertices of both shapes that are coincident (the same either way round).
     double coincidentShare() const
     {
-        return vertices ? double(coincident) / double(vertices) : 0.0;
+        const std::size_t all = vertices + targetVertices;
+        return all ? double(coincident + targetCoincident) / double(all) : 0.0;
     }
 };
 
