@@ -1,6 +1,7 @@
 /// @file Match.cc
 #include "Match.h"
 
+#include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/ExtremityMatching.h>
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
@@ -9,7 +10,6 @@
 #include <openvdb/Exceptions.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -294,12 +294,7 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     Extremities<D> a, b;
     auto findA = [&] { a = findExtremities<D>(unitSource, eo); };
     auto findB = [&] { b = findExtremities<D>(unitTarget, eo); };
-    if (opts.threaded) {
-        tbb::parallel_invoke(findA, findB);
-    } else {
-        findA();
-        findB();
-    }
+    detail::invokeBoth(opts.threaded, findA, findB);
     out.sourceExtremities = a.size();
     out.targetExtremities = b.size();
     const ExtremityPairing pairing = matchExtremities<D>(a, b);
@@ -492,12 +487,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             auto buildTarget = [&] {
                 level.shape2 = buildShapeSampler<D>(unitTarget, l, opts.sampler, targetTiers);
             };
-            if (opts.threaded) {
-                tbb::parallel_invoke(buildSource, buildTarget);
-            } else {
-                buildSource();
-                buildTarget();
-            }
+            detail::invokeBoth(opts.threaded, buildSource, buildTarget);
             level.surfacePoints = &unitSource.points;
             if (l <= lastLandmarkLevel) {
                 if (!early.source.empty()) level.landmarks = &early;

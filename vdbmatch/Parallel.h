@@ -1,10 +1,12 @@
 /// @file Parallel.h
-/// @brief forEachIndex: a TBB parallel loop over [0, count) that can also run serially (the
-///        `threaded` flag every parallel function of vdbmatch takes).
+/// @brief forEachIndex: a TBB parallel loop over [0, count), and invokeBoth: two tasks side by
+///        side, both of which can also run serially (the `threaded` flag every parallel
+///        function of vdbmatch takes).
 #pragma once
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <cstddef>
 
@@ -24,6 +26,19 @@ forEachIndex(std::size_t count, bool threaded, const Func& func)
     } else {
         for (std::size_t i = 0; i != count; ++i)
             func(i);
+    }
+}
+
+/// Calls first() and second(): side by side with TBB if @a threaded, else in that order.
+template <typename First, typename Second>
+void
+invokeBoth(bool threaded, const First& first, const Second& second)
+{
+    if (threaded) {
+        tbb::parallel_invoke(first, second);
+    } else {
+        first();
+        second();
     }
 }
 

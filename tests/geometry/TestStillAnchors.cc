@@ -122,6 +122,8 @@ TEST(StillAnchors, TheSameEitherWayRound)
     ASSERT_EQ(ab.points.size(), ba.points.size());
     for (std::size_t k = 0; k < ab.points.size(); ++k)
         EXPECT_EQ(ab.points[k], ba.points[k]) << k;
+    EXPECT_EQ(ab.onTarget, ba.targetOnSource);
+    EXPECT_EQ(ab.targetOnSource, ba.onTarget);
     EXPECT_EQ(ab.coincident, ba.targetCoincident);
     EXPECT_EQ(ab.targetCoincident, ba.coincident);
     EXPECT_DOUBLE_EQ(ab.coincidentShare(), ba.coincidentShare());

@@ -1,10 +1,10 @@
+#include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/StillAnchors.h>
 
 #include <openvdb/Exceptions.h>
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Interpolation.h>
-#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -127,21 +127,15 @@ findStillAnchors(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     // The coincident vertices of both shapes, each against the other: the anchors are then
     // the same whichever shape is the source.
     std::vector<std::size_t> sourceCoincident, targetCoincident;
-    std::size_t targetOnSource = 0;
     const auto findSource = [&] {
         sourceCoincident =
             coincidentVertices(unitSource, unitTarget, opts, out.level, out.onTarget);
     };
     const auto findTarget = [&] {
         targetCoincident =
-            coincidentVertices(unitTarget, unitSource, opts, out.level, targetOnSource);
+            coincidentVertices(unitTarget, unitSource, opts, out.level, out.targetOnSource);
     };
-    if (opts.threaded) {
-        tbb::parallel_invoke(findSource, findTarget);
-    } else {
-        findSource();
-        findTarget();
-    }
+    detail::invokeBoth(opts.threaded, findSource, findTarget);
     out.coincident = sourceCoincident.size();
     out.targetCoincident = targetCoincident.size();
     std::vector<Vec<D>> candidates;

@@ -55,6 +55,7 @@ template <int D> struct StillAnchors
     std::size_t onTarget = 0;         ///< ... within tolerance of M2
     std::size_t coincident = 0;       ///< ... whose whole radius-patch is within tolerance of M2
     std::size_t targetVertices = 0;   ///< vertices of M2
+    std::size_t targetOnSource = 0;   ///< ... within tolerance of M1
     std::size_t targetCoincident = 0; ///< ... whose whole radius-patch is within tolerance of M1
     int level = 0;                    ///< the level of the distance bands
 
