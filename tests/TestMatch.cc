@@ -433,3 +433,104 @@ TEST(Match, LandmarksTurnACircleNoShapeEnergyCanTell)
     turned /= Real(circle.points.size());
     EXPECT_NEAR(turned, turn, 0.25 * turn);
 }
+
+namespace {
+
+/// Matches a circle onto an ellipse of semi-axes @a ax, @a ay with @a iterations descent steps
+/// per level (levels 3..5): a few steps leave the circle far from the ellipse, so that more than
+/// 1% of M1 ends farther than sigma from M2 and MatchOptions::secondPath runs. Checks that the
+/// second path is exactly the run with SECOND_PATH_VOLUME_FACTOR times the volume weight below
+/// the finest level, that the first path is the run without it, and that the result is the
+/// one whose finest level ended lower; returns whether that was the second.
+bool
+checkSecondPath(Real ax, Real ay, int iterations)
+{
+    const Surface<2> circle = ellipseCurve(Vec<2>(0.0, 0.0), 1.0, 1.0, 300);
+    const Surface<2> ellipse = ellipseCurve(Vec<2>(0.5, 0.2), ax, ay, 300);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 3;
+    opts.multiscale.maxLevel = 5;
+    opts.multiscale.descent.maxIterations = iterations;
+    opts.threaded = false;
+    const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+    const MatchResult<2> both = match<2>(circle, ellipse, placement, opts);
+    MatchOptions firstOnly = opts;
+    firstOnly.secondPath = false;
+    MatchOptions secondOnly = firstOnly;
+    secondOnly.multiscale.coarseVolumeFactor = SECOND_PATH_VOLUME_FACTOR;
+    const MatchResult<2> first = match<2>(circle, ellipse, placement, firstOnly);
+    const MatchResult<2> second = match<2>(circle, ellipse, placement, secondOnly);
+    EXPECT_TRUE(both.isComplete() && first.isComplete() && second.isComplete());
+
+    const SecondPathSummary& sp = both.secondPath;
+    EXPECT_TRUE(sp.requested);
+    EXPECT_TRUE(sp.ran) << sp.reason;
+    EXPECT_TRUE(sp.done);
+    EXPECT_FALSE(first.secondPath.requested);
+    EXPECT_GT(sp.farShare, DEFAULT_SECOND_PATH_SHARE);
+    EXPECT_EQ(sp.farShare, first.residual.farShare);
+    EXPECT_EQ(sp.volumeFactor, SECOND_PATH_VOLUME_FACTOR);
+    const Real e1 = first.levels.back().report.energy, e2 = second.levels.back().report.energy;
+    EXPECT_EQ(sp.firstEnergy, e1);
+    EXPECT_EQ(sp.secondEnergy, e2);
+    EXPECT_EQ(sp.secondFarShare, second.residual.farShare);
+    EXPECT_NE(e1, e2); // the paths differ
+    EXPECT_EQ(sp.keptSecond, e2 < e1);
+    const MatchResult<2>& kept = sp.keptSecond ? second : first;
+    const MatchResult<2>& discarded = sp.keptSecond ? first : second;
+    EXPECT_EQ(both.levels.back().report.energy, std::min(e1, e2));
+    EXPECT_EQ(both.displacement.cols(), kept.displacement.cols());
+    EXPECT_TRUE(both.displacement.cols() == kept.displacement.cols() &&
+                both.displacement == kept.displacement);
+    EXPECT_EQ(both.residual.meanUnit, kept.residual.meanUnit);
+    EXPECT_EQ(both.minJacobian, kept.minJacobian);
+    EXPECT_EQ(both.levels.size(), 3u);
+    EXPECT_EQ(sp.discardedLevels.size(), 3u);
+    if (!sp.discardedLevels.empty()) {
+        EXPECT_EQ(sp.discardedLevels.back().report.energy, discarded.levels.back().report.energy);
+    }
+    for (std::size_t i = 0; i < circle.points.size(); ++i)
+        EXPECT_EQ(both.deformedSource.points[i], kept.deformedSource.points[i]);
+
+    // Below the threshold nothing runs again: the result is the first path's, bit for bit.
+    MatchOptions lenient = opts;
+    lenient.secondPathShare = 1;
+    const MatchResult<2> once = match<2>(circle, ellipse, placement, lenient);
+    EXPECT_TRUE(once.secondPath.requested);
+    EXPECT_FALSE(once.secondPath.ran);
+    EXPECT_NE(once.secondPath.reason.find("reached M2"), std::string::npos)
+        << once.secondPath.reason;
+    EXPECT_TRUE(once.displacement == first.displacement);
+    return sp.keptSecond;
+}
+
+} // namespace
+
+TEST(Match, SecondPathKeepsTheLowerEnergyOfTwoPaths)
+{
+    // An addition to the paper: on by default, never in the paper's experiment.
+    EXPECT_TRUE(MatchOptions::defaults(2).secondPath);
+    EXPECT_TRUE(MatchOptions::defaults(3).secondPath);
+    EXPECT_FALSE(MatchOptions::paper(2).secondPath);
+    EXPECT_FALSE(MatchOptions::paper(3).secondPath);
+    // One step per level: the first path ends lower (15.11 against 15.22). Two steps onto a
+    // longer ellipse: the second path ends lower (3.23 against 6.33).
+    EXPECT_FALSE(checkSecondPath(1.8, 0.5, 1));
+    EXPECT_TRUE(checkSecondPath(2.2, 0.7, 2));
+
+    // One level has no coarse level to run differently.
+    const Surface<2> circle = ellipseCurve(Vec<2>(0.0, 0.0), 1.0, 1.0, 300);
+    const Surface<2> ellipse = ellipseCurve(Vec<2>(0.5, 0.2), 1.8, 0.5, 300);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = opts.multiscale.maxLevel = 4;
+    opts.multiscale.descent.maxIterations = 1;
+    const MatchResult<2> alone =
+        match<2>(circle, ellipse, placeInUnitBox(circle, ellipse, opts.margin), opts);
+    EXPECT_FALSE(alone.secondPath.ran);
+    EXPECT_NE(alone.secondPath.reason.find("one level"), std::string::npos)
+        << alone.secondPath.reason;
+    opts.secondPathShare = 1.5;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.secondPathShare = -0.1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}

@@ -129,6 +129,7 @@ MatchOptions::defaults(int dim)
     opts.multiscale.membraneSaturationLevels = DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS;
     opts.autoLandmarks = true;
     opts.autoAnchors = true;
+    opts.secondPath = true;
     return opts;
 }
 
@@ -169,6 +170,10 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: the anchor tolerance and radius must be finite and >= 0, got "
                           << anchorOptions.tolerance << " and " << anchorOptions.radius);
+    }
+    if (!(secondPathShare >= 0 && secondPathShare <= 1)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: secondPathShare must be in [0, 1], got " << secondPathShare);
     }
     if (autoLandmarkLevels < 1) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -359,6 +364,39 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             out.anchors.push_back(w);
         }
         out.seconds = secondsSince(start);
+    }
+    return out;
+}
+
+/// |d2(phi(v))| over the points v (Omega units), with @a target the finest level's sampler;
+/// @a moved receives phi(v).
+struct SurfaceResidual
+{
+    double sum = 0, max = 0;
+    std::size_t samples = 0, far = 0;
+    double farShare() const { return samples ? double(far) / double(samples) : 0.0; }
+};
+
+template <int D>
+SurfaceResidual
+surfaceResidual(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
+                const std::vector<Vec<D>>& points, const FieldSampler<D>* target, Real far,
+                std::vector<Vec<D>>& moved)
+{
+    const multiscale::PiecewiseLinearInterpolator<D> phi(lattice);
+    SurfaceResidual out;
+    moved.resize(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        Vec<D> du = Vec<D>::Zero();
+        phi.evaluate(u, points[i], du);
+        moved[i] = points[i] + du;
+        Real d;
+        if (target && target->sampleDistance(moved[i], d)) {
+            out.sum += std::abs(d);
+            out.max = std::max<double>(out.max, std::abs(d));
+            if (std::abs(d) > far) ++out.far;
+            ++out.samples;
+        }
     }
     return out;
 }
@@ -623,37 +661,85 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             return u;
         };
     }
-    const multiscale::MultiscaleDriver<D> driver(opts.multiscale);
-    multiscale::MultiscaleResult<D> run =
-        driver.run(builder, observer.iteration, levelEnd, opts.threaded, interrupter, initialGuess);
-    if (result.levels.size() < run.reports.size()) {
-        // Interrupted before a level started: no lattice was built for it.
-        LevelSummary stopped;
-        stopped.level = run.reports.back().level;
-        stopped.report = run.reports.back();
-        result.levels.push_back(stopped);
+    // One path through the levels: its result, level summaries and the residual on M1.
+    struct Path
+    {
+        multiscale::MultiscaleResult<D> run;
+        std::vector<LevelSummary> levels;
+        SurfaceResidual residual;
+        std::vector<Vec<D>> moved; ///< phi(v), Omega units
+        Real energy = INF;         ///< at the end of the finest level
+    };
+    const Real finestSigma =
+        opts.multiscale.energy.sigmaFactor * std::ldexp(Real(1), -opts.multiscale.maxLevel);
+    auto runPath = [&](const multiscale::MultiscaleOptions& levelOpts) {
+        result.levels.clear();
+        const multiscale::MultiscaleDriver<D> driver(levelOpts);
+        Path path;
+        path.run = driver.run(builder, observer.iteration, levelEnd, opts.threaded, interrupter,
+                              initialGuess);
+        if (result.levels.size() < path.run.reports.size()) {
+            // Interrupted before a level started: no lattice was built for it.
+            LevelSummary stopped;
+            stopped.level = path.run.reports.back().level;
+            stopped.report = path.run.reports.back();
+            result.levels.push_back(stopped);
+        }
+        path.levels = std::move(result.levels);
+        if (path.run.lattice) {
+            path.residual =
+                surfaceResidual<D>(*path.run.lattice, path.run.displacement, unitSource.points,
+                                   lastTarget.get(), finestSigma, path.moved);
+        }
+        if (path.run.isComplete()) path.energy = path.run.reports.back().energy;
+        return path;
+    };
+    Path kept = runPath(opts.multiscale);
+
+    // MatchOptions::secondPath: the coarse levels left part of M1 behind.
+    SecondPathSummary& second = result.secondPath;
+    second.requested = opts.secondPath;
+    second.threshold = opts.secondPathShare;
+    second.farShare = kept.residual.farShare();
+    if (opts.secondPath) {
+        if (opts.multiscale.minLevel >= opts.multiscale.maxLevel) {
+            second.reason = "one level: no coarse level to run differently";
+        } else if (!kept.run.isComplete() || !(kept.energy < INF)) {
+            second.reason = "the first path did not complete";
+        } else if (!(second.farShare > opts.secondPathShare)) {
+            std::ostringstream r;
+            r << "the first path reached M2: " << 100 * second.farShare
+              << "% of M1 ended farther than sigma from it (threshold "
+              << 100 * opts.secondPathShare << "%)";
+            second.reason = r.str();
+        } else {
+            const Clock::time_point t0 = Clock::now();
+            multiscale::MultiscaleOptions levelOpts = opts.multiscale;
+            levelOpts.coarseVolumeFactor *= SECOND_PATH_VOLUME_FACTOR;
+            second.ran = true;
+            second.volumeFactor = levelOpts.coarseVolumeFactor;
+            second.firstEnergy = kept.energy;
+            if (observer.secondPath) observer.secondPath(second);
+            Path other = runPath(levelOpts);
+            second.secondEnergy = other.energy;
+            second.secondFarShare = other.residual.farShare();
+            // Strictly lower: on a tie (or an interrupted second path) the first path stays.
+            second.keptSecond = other.run.isComplete() && other.energy < kept.energy;
+            if (second.keptSecond) std::swap(kept, other);
+            second.discardedLevels = std::move(other.levels);
+            second.seconds = secondsSince(t0);
+            second.done = true;
+            if (observer.secondPath) observer.secondPath(second);
+        }
     }
-    result.lattice = run.lattice;
-    result.displacement = std::move(run.displacement);
+    result.levels = std::move(kept.levels);
+    result.lattice = kept.run.lattice;
+    result.displacement = std::move(kept.run.displacement);
 
     result.deformedSource = source;
     if (result.lattice) {
-        const multiscale::PiecewiseLinearInterpolator<D> phi(*result.lattice);
-        double sum = 0, maxAbs = 0;
-        std::size_t n = 0;
-        for (std::size_t i = 0; i < unitSource.points.size(); ++i) {
-            const Vec<D>& x = unitSource.points[i];
-            Vec<D> du = Vec<D>::Zero();
-            phi.evaluate(result.displacement, x, du);
-            const Vec<D> y = x + du;
-            result.deformedSource.points[i] = toWorld<D>(placement, y);
-            Real d;
-            if (lastTarget && lastTarget->sampleDistance(y, d)) {
-                sum += std::abs(d);
-                maxAbs = std::max<double>(maxAbs, std::abs(d));
-                ++n;
-            }
-        }
+        for (std::size_t i = 0; i < kept.moved.size(); ++i)
+            result.deformedSource.points[i] = toWorld<D>(placement, kept.moved[i]);
         if (!landmarks.source.empty()) {
             const energy::LandmarkTerm<D> term(*result.lattice, landmarks);
             Real mean = 0, max = 0;
@@ -661,9 +747,11 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             result.landmarks.meanWorld = placement.toWorldLength(mean);
             result.landmarks.maxWorld = placement.toWorldLength(max);
         }
-        result.residual.samples = n;
-        result.residual.meanUnit = n ? sum / double(n) : 0.0;
-        result.residual.maxUnit = maxAbs;
+        const SurfaceResidual& r = kept.residual;
+        result.residual.samples = r.samples;
+        result.residual.meanUnit = r.samples ? r.sum / double(r.samples) : 0.0;
+        result.residual.maxUnit = r.max;
+        result.residual.farShare = r.farShare();
         result.residual.meanWorld = placement.toWorldLength(result.residual.meanUnit);
         result.residual.maxWorld = placement.toWorldLength(result.residual.maxUnit);
         for (auto it = result.levels.rbegin(); it != result.levels.rend(); ++it) {

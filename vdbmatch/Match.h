@@ -95,6 +95,13 @@ constexpr int DEFAULT_MATCH_SURFACE_LEVELS = 1;
 /// Ending level 6 the same way (7 at levels 4..7) cost 6-19% correspondence error: the coarser
 /// levels set the correspondence in their slow tail (docs/numerics.md).
 constexpr int DEFAULT_MATCH_SURFACE_FROM_LEVEL = 0;
+/// MatchOptions::secondPath: a second path runs when more than this share of M1's vertices ended
+/// farther than sigma of the finest level from M2 (|d2(phi(v))| > 2 h: part of the source left
+/// behind, outside the band where the finest level can still pull it; docs/numerics.md "Second
+/// path").
+constexpr double DEFAULT_SECOND_PATH_SHARE = 0.01;
+/// The second path's MultiscaleOptions::coarseVolumeFactor, times the first path's.
+constexpr double SECOND_PATH_VOLUME_FACTOR = 4;
 /// Default MultiscaleOptions::coarseMembraneFactor (--coarse-membrane-factor), an addition to the
 /// paper: the levels below the finest weigh the membrane term by 3 c_mem. The coarse levels set
 /// the tangential correspondence, and a stiffer membrane there keeps it closer to an isometry;
@@ -213,16 +220,27 @@ struct MatchOptions
     bool autoAnchors = false;
     StillAnchorOptions anchorOptions;               ///< tolerance, radius and count (Omega units)
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
+    /// Second path, an addition to the paper (docs/numerics.md "Second path"): when more than
+    /// secondPathShare of M1's vertices end farther than sigma of the finest level from M2 (a
+    /// part of the source left behind by the coarse levels, a local minimum the finest level
+    /// cannot leave), the levels run again from the start with SECOND_PATH_VOLUME_FACTOR times
+    /// the coarse volume factor (multiscale.coarseVolumeFactor), and the result whose finest
+    /// level ends at the lower energy is kept. The finest level's functional is the same on
+    /// both paths, so the choice is the paper's own criterion. Needs two levels or more. On in
+    /// defaults(), off in paper().
+    bool secondPath = false;
+    double secondPathShare = DEFAULT_SECOND_PATH_SHARE; ///< in [0, 1]
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
     /// DEFAULT_MATCH_METRIC_TOLERANCE: paper(dim) plus the surface test, the coarse membrane
-    /// factor, the membrane saturation at the first levels and automatic landmarks.
+    /// factor, the membrane saturation at the first levels, automatic landmarks and anchors, and
+    /// the second path.
     static MatchOptions defaults(int dim);
     /// The paper's experiment (`--preset paper`): tab:parameters and its levels (4..8 in 3D,
     /// 4..9 in 2D, sigma = 2h), and none of our additions that change the result (no surface
-    /// test, no landmarks). The paper gives no stopping rule, metric weight or refinement
-    /// margin: those are ours, as in defaults().
+    /// test, no landmarks, no second path). The paper gives no stopping rule, metric weight or
+    /// refinement margin: those are ours, as in defaults().
     static MatchOptions paper(int dim);
     /// Throws openvdb::ValueError naming the first invalid field.
     void validate() const;
@@ -289,6 +307,26 @@ struct MatchResidual
     double meanWorld = 0, maxWorld = 0; ///< world units
     double meanUnit = 0, maxUnit = 0;   ///< Omega units (fraction of the unit box)
     std::size_t samples = 0;
+    /// Share of the samples farther than sigma of the finest level (|d2(phi(v))| > 2 h).
+    double farShare = 0;
+};
+
+/// What MatchOptions::secondPath did.
+struct SecondPathSummary
+{
+    bool requested = false;  ///< secondPath was set
+    bool ran = false;        ///< the first path left part of M1 behind and a second path ran
+    std::string reason;      ///< why it did not run, when requested && !ran
+    double farShare = 0;     ///< of the first path (MatchResidual::farShare)
+    double threshold = 0;    ///< MatchOptions::secondPathShare
+    double volumeFactor = 0; ///< the second path's coarse volume factor
+    /// The finest level's final energy on each path, and the second path's farShare.
+    double firstEnergy = 0, secondEnergy = 0, secondFarShare = 0;
+    bool done = false;       ///< the second path ended (the energies and keptSecond are set)
+    bool keptSecond = false; ///< the second path ended lower and is the result
+    /// The levels of the path that was not kept (MatchResult::levels holds the kept one's).
+    std::vector<LevelSummary> discardedLevels;
+    double seconds = 0; ///< of the second path
 };
 
 template <int D> struct MatchResult
@@ -303,6 +341,7 @@ template <int D> struct MatchResult
     MatchResidual residual;
     LandmarkResidual landmarks;
     AutoLandmarkSummary autoLandmarks;
+    SecondPathSummary secondPath;
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 
@@ -324,6 +363,9 @@ struct MatchObserver
     std::function<void(const LevelSummary&)> levelEnd;
     /// After the automatic landmarks were looked for, before the first level (when requested).
     std::function<void(const AutoLandmarkSummary&)> autoLandmarks;
+    /// Before a second path starts (MatchOptions::secondPath; ran and farShare filled), and
+    /// once more when it ended (energies and keptSecond filled).
+    std::function<void(const SecondPathSummary&)> secondPath;
 };
 
 /// Matches @a source (M1) onto @a target (M2).

@@ -64,6 +64,7 @@ def match(
     membrane_saturation_levels: int | None = None,
     c_bend: float | None = None,
     c_vol: float | None = None,
+    coarse_volume_factor: float | None = None,
     q: float | None = None,
     theta: float | None = None,
     tau: float | None = None,
@@ -91,6 +92,8 @@ def match(
     initial_step: str | None = None,
     trial_growth: float | None = None,
     metric_tolerance: float | None = None,
+    second_path: str | None = None,
+    second_path_share: float | None = None,
     strict: bool | None = None,
     threads: int | None = None,
 ) -> MatchResult: ...

@@ -144,19 +144,19 @@ else
     fail "config-command-line-wins"
 fi
 # A report.json of a version before the surface test (no surfaceTolerance) reproduces its run
-# with the test off, and one before the coarse membrane factor with one c_mem, whatever today's
-# defaults.
+# with the test off, one before the coarse membrane factor with one c_mem, and one before the
+# second path with one path, whatever today's defaults.
 "$PYTHON" - "$SCRATCH/m3/report.json" "$SCRATCH/old_report.json" <<'PY'
 import json, sys
 r = json.load(open(sys.argv[1]))
 for k in ("surfaceTolerance", "surfaceLevels", "surfaceFromLevel", "coarseMembraneFactor",
-          "membraneSaturation"):
+          "membraneSaturation", "secondPath"):
     r["parameters"].pop(k, None)
 json.dump(r, open(sys.argv[2], "w"))
 PY
 check config-old-report 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3old" --config "$SCRATCH/old_report.json" --levels 3..3 --quiet
 count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 and p["surfaceFromLevel"] == 0 and p["membraneSaturation"] == 0 else 1)' "$SCRATCH/m3old/report.json"; then
+if "$PYTHON" -c 'import json, sys; p = json.load(open(sys.argv[1]))["parameters"]; sys.exit(0 if p["surfaceTolerance"] == 0 and p["coarseMembraneFactor"] == 1 and p["surfaceFromLevel"] == 0 and p["membraneSaturation"] == 0 and p["secondPath"] == "off" else 1)' "$SCRATCH/m3old/report.json"; then
     echo "ok   config-old-report-surface-off"
 else
     fail "config-old-report-surface-off"
@@ -280,6 +280,37 @@ assert m["vdbmatch_membrane_saturation_levels"] == 1, dict(m)
 PY
 check coarse-membrane-factor-range 3 '' 'coarseMembraneFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor -1 --quiet
 check coarse-membrane-factor-number 1 '' "--coarse-membrane-factor expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-membrane-factor x --quiet
+# The coarse volume factor and the second path (additions to the paper): ranges, defaults, the
+# report. A run that reaches its target reports why no second path ran; one step per level
+# (levels 4..6) leaves the figure's arms behind, and the second path runs.
+check coarse-volume-factor-range 3 '' 'coarseVolumeFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-volume-factor -1 --quiet
+check second-path-value 1 '' "--second-path expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path maybe --quiet
+check second-path-share-range 3 '' 'secondPathShare must be in \[0, 1\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-share 2 --quiet
+FIG=("$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" --levels 4..6 --max-iterations 1 --no-inverse --no-jacobian)
+check second-path-run 0 'second path: .*% of M1 ended farther than sigma from M2 on the first path; energy .* kept the (first|second)' '' -- "${FIG[@]}" -o "$SCRATCH/sp"
+check second-path-off 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spoff" --second-path off --quiet
+check second-path-factor 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spcvf" --second-path off --coarse-volume-factor 4 --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/sp" "$SCRATCH/spoff" "$SCRATCH/spcvf" "$SCRATCH/m3" "$SCRATCH/pp" <<'PY'; then echo "ok   second-path-report"; else fail "second-path-report"; fi
+import json, sys
+both, first, second, default, paper = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+assert default["parameters"]["secondPath"] == "on" and paper["parameters"]["secondPath"] == "off", paper["parameters"]
+assert default["parameters"]["coarseVolumeFactor"] == 1 and default["parameters"]["secondPathShare"] == 0.01
+assert default["secondPath"]["ran"] is False and "reached M2" in default["secondPath"]["reason"], default["secondPath"]
+assert "secondPath" not in paper and "secondPath" not in first
+sp = both["secondPath"]
+assert sp["ran"] and sp["farShare"] > 0.01 and sp["coarseVolumeFactor"] == 4, sp
+# the first path is the run without it, the second the run with 4x the coarse volume weight
+assert sp["firstEnergy"] == first["result"]["energy"], (sp, first["result"])
+assert sp["secondEnergy"] == second["result"]["energy"], (sp, second["result"])
+assert sp["firstEnergy"] != sp["secondEnergy"]
+assert sp["kept"] == ("second" if sp["secondEnergy"] < sp["firstEnergy"] else "first"), sp
+assert both["result"]["energy"] == min(sp["firstEnergy"], sp["secondEnergy"]), both["result"]
+assert [l["level"] for l in sp["discardedLevels"]] == [4, 5, 6] == [l["level"] for l in both["levels"]]
+kept = first if sp["kept"] == "first" else second
+assert both["result"]["residual"] == kept["result"]["residual"], (both["result"], kept["result"])
+assert both["result"]["residual"]["farShare"] == sp["farShare" if sp["kept"] == "first" else "secondFarShare"]
+PY
 check trial-growth-range 3 '' 'grow must be finite and >= 1' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --trial-growth 0.5 --quiet
 check trial-growth 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/tg" --levels 3..4 --trial-growth 1.5 --quiet
 count=$((count + 1))

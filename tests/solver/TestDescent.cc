@@ -369,6 +369,29 @@ TEST(Descent, CoarseMembraneFactorWeighsTheMembraneBelowTheFinestLevelOnly)
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
 }
 
+TEST(Descent, CoarseVolumeFactorWeighsTheVolumeBelowTheFinestLevelOnly)
+{
+    // At the identity the volume densities vanish (det D phi = 1), so the weights are checked
+    // through energyAt, which the driver uses for every coefficient (the membrane test above).
+    MultiscaleOptions opts = MultiscaleOptions::defaults(3);
+    opts.minLevel = 4;
+    opts.maxLevel = 7;
+    opts.coarseVolumeFactor = 4;
+    opts.coarseMembraneFactor = 3;
+    for (int l = 4; l <= 7; ++l) {
+        const EnergyParameters p = opts.energyAt(l);
+        EXPECT_EQ(p.cVol, l < 7 ? 4 * opts.energy.cVol : opts.energy.cVol) << l;
+        EXPECT_EQ(p.cMem, l < 7 ? 3 * opts.energy.cMem : opts.energy.cMem) << l;
+        EXPECT_EQ(p.cMatch, opts.energy.cMatch) << l;
+        EXPECT_EQ(p.cBend, opts.energy.cBend) << l;
+    }
+    EXPECT_EQ(MultiscaleOptions::defaults(2).coarseVolumeFactor, 1.0); // the paper's c_vol
+    opts.coarseVolumeFactor = -1;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.coarseVolumeFactor = std::numeric_limits<Real>::quiet_NaN();
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, MembraneSaturationActsAtTheFirstLevelsOnly)
 {
     // As above: no descent steps, so the runs differ only in the energy of each level.

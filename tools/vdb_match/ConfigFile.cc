@@ -27,6 +27,7 @@ configKeys()
         {"membraneSaturationLevels", "--membrane-saturation-levels"},
         {"cBend", "--c-bend"},
         {"cVol", "--c-vol"},
+        {"coarseVolumeFactor", "--coarse-volume-factor"},
         {"q", "--q"},
         {"theta", "--theta"},
         {"tau", "--tau"},
@@ -54,6 +55,8 @@ configKeys()
         {"autoLandmarkLevels", "--auto-landmark-levels"},
         {"autoLandmarkMinMotion", "--auto-landmark-min-motion"},
         {"autoAnchors", "--auto-anchors"},
+        {"secondPath", "--second-path"},
+        {"secondPathShare", "--second-path-share"},
         {"anchorWeight", "--anchor-weight"},
         {"anchorCount", "--anchor-count"},
         {"anchorRadius", "--anchor-radius"},
@@ -151,6 +154,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("autoAnchors")) {
         settings.push_back({"autoAnchors", "--auto-anchors", "off"});
+    }
+    // ... and one before the second path (no secondPath) ran one path.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("secondPath")) {
+        settings.push_back({"secondPath", "--second-path", "off"});
     }
     return settings;
 }

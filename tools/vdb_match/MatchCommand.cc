@@ -65,7 +65,8 @@ struct MatchCliOptions
     std::optional<int> minLevel, maxLevel;
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     std::optional<double> coarseMembraneFactor; ///< default per preset (MatchOptions)
-    std::optional<double> membraneSaturation;   ///< default per preset (MatchOptions)
+    std::optional<double> coarseVolumeFactor;
+    std::optional<double> membraneSaturation; ///< default per preset (MatchOptions)
     std::optional<int> membraneSaturationLevels;
     double tau = EnergyParameters().tau;
     std::string preset = "default"; ///< --preset: "default" or "paper" (MatchOptions::paper)
@@ -97,7 +98,9 @@ struct MatchCliOptions
     std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
     int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
     double autoLandmarkMinMotion = MatchOptions::defaults(3).autoLandmarkMinMotion;
-    std::optional<bool> autoAnchors;    ///< --auto-anchors on|off (default per preset)
+    std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
+    std::optional<bool> secondPath;  ///< --second-path on|off (default per preset)
+    double secondPathShare = DEFAULT_SECOND_PATH_SHARE;
     std::optional<double> anchorWeight; ///< --anchor-weight (default per dimension)
     StillAnchorOptions anchorOptions;
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
@@ -127,6 +130,23 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                 : ", with " + std::to_string(a.anchors.size()) +
                       " still anchors at every level (M1 and M2 coincide on " +
                       fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
+}
+
+/// One line on what the second path did (MatchOptions::secondPath), when it starts or ends.
+std::string
+secondPathLine(const SecondPathSummary& sp)
+{
+    const std::string head = "second path: " + fixed("%.1f", 100 * sp.farShare) +
+                             "% of M1 ended farther than sigma from M2 on the first path";
+    if (sp.done) {
+        return head + "; energy " + fixed("%.4g", sp.firstEnergy) + " (first) against " +
+               fixed("%.4g", sp.secondEnergy) + " (second, " +
+               fixed("%.1f", 100 * sp.secondFarShare) + "% far): kept the " +
+               (sp.keptSecond ? "second" : "first");
+    }
+    return head + " (energy " + fixed("%.4g", sp.firstEnergy) +
+           "): running the levels again with the volume weight x" + formatNumber(sp.volumeFactor) +
+           " below the finest level";
 }
 
 std::vector<Option<MatchCliOptions>>
@@ -223,7 +243,7 @@ matchOptionTable()
         {"--preset", "NAME", "Energy (paper tab:parameters)",
          "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
          "our additions that change the result (no surface test, one c_mem at every level, no "
-         "automatic landmarks or anchors, no landmarks unless given); "
+         "automatic landmarks or anchors, no second path, no landmarks unless given); "
          "options given override it (default: default)",
          [](O& o, const std::string& v) {
              if (v != "default" && v != "paper")
@@ -277,6 +297,12 @@ matchOptionTable()
          "weight of the volume term, times sigma^theta (default " + both(p3.cVol, p2.cVol) + ")" +
              "\npaper: c_vol, eq:EsymVol",
          [](O& o, const std::string& v) { o.cVol = parseDouble("--c-vol", v); }},
+        {"--coarse-volume-factor", "F", "Energy (paper tab:parameters)",
+         "an addition to the paper: the levels below the finest weigh the volume term by F c_vol, "
+         "the finest level by c_vol (default 1)",
+         [](O& o, const std::string& v) {
+             o.coarseVolumeFactor = parseDouble("--coarse-volume-factor", v);
+         }},
         {"--q", "X", "Energy (paper tab:parameters)",
          "matching exponent, weight sigma^-q (default " + both(p3.q, p2.q) + ")" +
              "\npaper: q, eq:EsymMatch",
@@ -433,6 +459,27 @@ matchOptionTable()
              formatNumber(d.metricTolerance) + ")",
          [](O& o, const std::string& v) {
              o.metricTolerance = parseDouble("--metric-tolerance", v);
+         }},
+        {"--second-path", "on|off", "Descent",
+         "an addition to the paper: when more than --second-path-share of M1 ends farther than "
+         "sigma of the finest level from M2 (part of the source left behind by the coarse "
+         "levels), run the levels again with " +
+             formatNumber(SECOND_PATH_VOLUME_FACTOR) +
+             "x the volume weight below the finest level and keep the result whose finest level "
+             "ends at the lower energy (docs/numerics.md) (default " +
+             std::string(MatchOptions::defaults(3).secondPath ? "on" : "off") +
+             "; --preset paper: off)",
+         [](O& o, const std::string& v) {
+             if (v != "on" && v != "off")
+                 throw UsageError("--second-path expects 'on' or 'off', got '" + v + "'");
+             o.secondPath = v == "on";
+         }},
+        {"--second-path-share", "X", "Descent",
+         "the share of M1's vertices, in [0, 1], that must end farther than sigma from M2 for "
+         "--second-path to run (default " +
+             formatNumber(DEFAULT_SECOND_PATH_SHARE) + ")",
+         [](O& o, const std::string& v) {
+             o.secondPathShare = parseDouble("--second-path-share", v);
          }},
         {"--strict", nullptr, "Descent",
          "exit with code 4 if the finest level did not converge (outputs are still written)",
@@ -776,6 +823,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params.update(energyParametersJson(p));
     params["coarseMembraneFactor"] = opts.multiscale.coarseMembraneFactor;
     params["membraneSaturationLevels"] = opts.multiscale.membraneSaturationLevels;
+    params["coarseVolumeFactor"] = opts.multiscale.coarseVolumeFactor;
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
@@ -803,7 +851,9 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorWeight", opts.anchorWeight},
              {"anchorCount", opts.anchorOptions.count},
              {"anchorRadius", opts.anchorOptions.radius},
-             {"anchorTolerance", opts.anchorOptions.tolerance}});
+             {"anchorTolerance", opts.anchorOptions.tolerance},
+             {"secondPath", opts.secondPath ? "on" : "off"},
+             {"secondPathShare", opts.secondPathShare}});
     if (r.autoLandmarks.requested) {
         const AutoLandmarkSummary& a = r.autoLandmarks;
         Json pairs = Json::array();
@@ -842,11 +892,10 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                               {"meanWorld", r.landmarks.meanWorld},
                               {"maxWorld", r.landmarks.maxWorld}};
     }
-    Json levels = Json::array();
-    for (const LevelSummary& l : r.levels) {
+    const auto levelJson = [&p](const LevelSummary& l) {
         const solver::Report& rep = l.report;
         const double h = std::ldexp(1.0, -l.level);
-        levels.push_back(Json{
+        return Json{
             {"level", l.level},
             {"h", h},
             {"sigma", p.sigmaFactor * h},
@@ -875,9 +924,31 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
             {"coarseBandSimplices", rep.terms.coarseBandSimplices},
             {"seconds", Json{{"fields", l.fieldSeconds},
                              {"lattice", l.latticeSeconds},
-                             {"descent", rep.elapsedSeconds}}}});
-    }
+                             {"descent", rep.elapsedSeconds}}}};
+    };
+    Json levels = Json::array();
+    for (const LevelSummary& l : r.levels)
+        levels.push_back(levelJson(l));
     j["levels"] = levels;
+    if (r.secondPath.requested) {
+        const SecondPathSummary& sp = r.secondPath;
+        Json discarded = Json::array();
+        for (const LevelSummary& l : sp.discardedLevels)
+            discarded.push_back(levelJson(l));
+        j["secondPath"] = Json{{"ran", sp.ran},
+                               {"reason", sp.ran ? Json() : Json(sp.reason)},
+                               {"farShare", sp.farShare},
+                               {"threshold", sp.threshold}};
+        if (sp.ran) {
+            j["secondPath"].update(Json{{"coarseVolumeFactor", sp.volumeFactor},
+                                        {"firstEnergy", sp.firstEnergy},
+                                        {"secondEnergy", sp.secondEnergy},
+                                        {"secondFarShare", sp.secondFarShare},
+                                        {"kept", sp.keptSecond ? "second" : "first"},
+                                        {"discardedLevels", discarded},
+                                        {"seconds", sp.seconds}});
+        }
+    }
     const solver::Report* last = r.levels.empty() ? nullptr : &r.levels.back().report;
     j["result"] = Json{{"energy", last ? last->energy : INF},
                        {"terms", termsJson(last ? last->terms : EnergyTerms())},
@@ -886,7 +957,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                                          {"maxWorld", r.residual.maxWorld},
                                          {"meanUnit", r.residual.meanUnit},
                                          {"maxUnit", r.residual.maxUnit},
-                                         {"samples", r.residual.samples}}},
+                                         {"samples", r.residual.samples},
+                                         {"farShare", r.residual.farShare}}},
                        {"seconds", Json{{"match", r.totalSeconds}, {"write", writeSeconds}}},
                        {"peakMemoryMB", peakMemoryMB()}};
     if (extra.inverse) {
@@ -922,6 +994,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         opts.multiscale.membraneSaturationLevels = *o.membraneSaturationLevels;
     if (o.cBend) p.cBend = *o.cBend;
     if (o.cVol) p.cVol = *o.cVol;
+    if (o.coarseVolumeFactor) opts.multiscale.coarseVolumeFactor = *o.coarseVolumeFactor;
     if (o.q) p.q = *o.q;
     if (o.theta) p.theta = *o.theta;
     p.tau = o.tau;
@@ -979,6 +1052,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
+    if (o.secondPath) opts.secondPath = *o.secondPath;
+    opts.secondPathShare = o.secondPathShare;
     opts.anchorOptions = o.anchorOptions;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
@@ -1065,6 +1140,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     observer.autoLandmarks = [&](const AutoLandmarkSummary& a) {
         progress->message(autoLandmarkLine(a, opts.multiscale.minLevel));
     };
+    observer.secondPath = [&](const SecondPathSummary& sp) {
+        progress->message(secondPathLine(sp));
+    };
 
     SignalInterrupter interrupter;
     // A start that folds on the new lattice: --init, an earlier result of the same pair, is
@@ -1129,6 +1207,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         openvdb::Int32Metadata(static_cast<int32_t>(opts.multiscale.membraneSaturationLevels)));
     deformation->insertMeta("vdbmatch_c_bend", openvdb::DoubleMetadata(p.cBend));
     deformation->insertMeta("vdbmatch_c_vol", openvdb::DoubleMetadata(p.cVol));
+    deformation->insertMeta("vdbmatch_coarse_volume_factor",
+                            openvdb::DoubleMetadata(opts.multiscale.coarseVolumeFactor));
     deformation->insertMeta("vdbmatch_q", openvdb::DoubleMetadata(p.q));
     deformation->insertMeta("vdbmatch_theta", openvdb::DoubleMetadata(p.theta));
     deformation->insertMeta("vdbmatch_tau", openvdb::DoubleMetadata(p.tau));
@@ -1283,6 +1363,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (result.autoLandmarks.requested)
         out << "vdb_match: " << autoLandmarkLine(result.autoLandmarks, opts.multiscale.minLevel)
             << "\n";
+    if (result.secondPath.ran) out << "vdb_match: " << secondPathLine(result.secondPath) << "\n";
     out << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
     for (std::size_t i = 1; i < extra.files.size(); ++i)
         out << ", " << extra.files[i];

@@ -50,6 +50,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: coarseMembraneFactor must be finite and in [0, "
                           << MAX_COEFFICIENT << "], got " << coarseMembraneFactor);
+    if (!(coarseVolumeFactor >= 0 && coarseVolumeFactor <= MAX_COEFFICIENT))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: coarseVolumeFactor must be finite and in [0, "
+                          << MAX_COEFFICIENT << "], got " << coarseVolumeFactor);
     if (membraneSaturationLevels < 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: membraneSaturationLevels must be >= 0, got "
@@ -66,7 +70,10 @@ EnergyParameters
 MultiscaleOptions::energyAt(int level) const
 {
     EnergyParameters p = energy;
-    if (level < maxLevel) p.cMem *= coarseMembraneFactor;
+    if (level < maxLevel) {
+        p.cMem *= coarseMembraneFactor;
+        p.cVol *= coarseVolumeFactor;
+    }
     if (level >= minLevel + membraneSaturationLevels) p.membraneSaturation = 0;
     return p;
 }

@@ -113,6 +113,12 @@ struct MultiscaleOptions
     /// tangential correspondence (docs/performance.md); a stiffer membrane keeps it near
     /// isometric there, and the finest level, with the paper's weight, can still stretch.
     Real coarseMembraneFactor = 1;
+    /// Volume weight below the finest level, an addition to the paper: levels l < maxLevel use
+    /// coarseVolumeFactor * energy.cVol in eq:EsymVol, the finest level energy.cVol (finite, in
+    /// [0, MAX_COEFFICIENT]; 1: the paper). A stiffer volume term resists the compression with
+    /// which a coarse level can leave part of a limb behind; match()'s second path
+    /// (MatchOptions::secondPath) uses it. The finest level's functional does not depend on it.
+    Real coarseVolumeFactor = 1;
     /// Levels, from minLevel, at which energy.membraneSaturation acts (>= 0): levels
     /// l < minLevel + membraneSaturationLevels saturate the membrane densities, the finer ones
     /// use the paper's W. An addition to the paper (math/Saturation.h): the coarse levels choose
@@ -120,9 +126,9 @@ struct MultiscaleOptions
     /// it.
     int membraneSaturationLevels = 2;
 
-    /// The energy coefficients at level l: `energy`, with c_mem scaled by coarseMembraneFactor
-    /// below the finest level, and the membrane saturation only at the first
-    /// membraneSaturationLevels levels.
+    /// The energy coefficients at level l: `energy`, with c_mem and c_vol scaled by
+    /// coarseMembraneFactor and coarseVolumeFactor below the finest level, and the membrane
+    /// saturation only at the first membraneSaturationLevels levels.
     EnergyParameters energyAt(int level) const;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
