@@ -714,19 +714,34 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             second.reason = r.str();
         } else {
             const Clock::time_point t0 = Clock::now();
-            multiscale::MultiscaleOptions levelOpts = opts.multiscale;
-            levelOpts.coarseVolumeFactor *= SECOND_PATH_VOLUME_FACTOR;
             second.ran = true;
-            second.volumeFactor = levelOpts.coarseVolumeFactor;
-            second.firstEnergy = kept.energy;
-            if (observer.secondPath) observer.secondPath(second);
-            Path other = runPath(levelOpts);
-            second.secondEnergy = other.energy;
-            second.secondFarShare = other.residual.farShare();
-            // Strictly lower: on a tie (or an interrupted second path) the first path stays.
-            second.keptSecond = other.run.isComplete() && other.energy < kept.energy;
-            if (second.keptSecond) std::swap(kept, other);
-            second.discardedLevels = std::move(other.levels);
+            const auto summary = [](const Path& path, Real factor) {
+                PathSummary p;
+                p.coarseVolumeFactor = factor;
+                p.energy = path.energy;
+                p.farShare = path.residual.farShare();
+                return p;
+            };
+            second.paths.push_back(summary(kept, opts.multiscale.coarseVolumeFactor));
+            multiscale::MultiscaleOptions levelOpts = opts.multiscale;
+            for (int k = 0; k < MAX_SECOND_PATHS; ++k) {
+                levelOpts.coarseVolumeFactor *= SECOND_PATH_VOLUME_FACTOR;
+                if (observer.secondPath) observer.secondPath(second);
+                Path other = runPath(levelOpts);
+                second.paths.push_back(summary(other, levelOpts.coarseVolumeFactor));
+                // Strictly lower: on a tie (or an interrupted path) the earlier path stays.
+                const bool complete = other.run.isComplete();
+                const bool lower = complete && other.energy < kept.energy;
+                if (lower) {
+                    second.paths[second.kept].levels = std::move(kept.levels);
+                    second.kept = second.paths.size() - 1;
+                    kept = std::move(other);
+                } else {
+                    second.paths.back().levels = std::move(other.levels);
+                }
+                // Enough when this path reached M2, or was interrupted.
+                if (!complete || !(second.paths.back().farShare > opts.secondPathShare)) break;
+            }
             second.seconds = secondsSince(t0);
             second.done = true;
             if (observer.secondPath) observer.secondPath(second);

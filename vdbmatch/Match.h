@@ -100,8 +100,10 @@ constexpr int DEFAULT_MATCH_SURFACE_FROM_LEVEL = 0;
 /// behind, outside the band where the finest level can still pull it; docs/numerics.md "Second
 /// path").
 constexpr double DEFAULT_SECOND_PATH_SHARE = 0.01;
-/// The second path's MultiscaleOptions::coarseVolumeFactor, times the first path's.
+/// Each further path's MultiscaleOptions::coarseVolumeFactor, times the previous path's.
 constexpr double SECOND_PATH_VOLUME_FACTOR = 4;
+/// Paths run after the first one at most (MatchOptions::secondPath): 4x, then 16x c_vol.
+constexpr int MAX_SECOND_PATHS = 2;
 /// Default MultiscaleOptions::coarseMembraneFactor (--coarse-membrane-factor), an addition to the
 /// paper: the levels below the finest weigh the membrane term by 3 c_mem. The coarse levels set
 /// the tangential correspondence, and a stiffer membrane there keeps it closer to an isometry;
@@ -224,10 +226,11 @@ struct MatchOptions
     /// secondPathShare of M1's vertices end farther than sigma of the finest level from M2 (a
     /// part of the source left behind by the coarse levels, a local minimum the finest level
     /// cannot leave), the levels run again from the start with SECOND_PATH_VOLUME_FACTOR times
-    /// the coarse volume factor (multiscale.coarseVolumeFactor), and the result whose finest
-    /// level ends at the lower energy is kept. The finest level's functional is the same on
-    /// both paths, so the choice is the paper's own criterion. Needs two levels or more. On in
-    /// defaults(), off in paper().
+    /// the coarse volume factor (multiscale.coarseVolumeFactor), and once more with that factor
+    /// again if that path too leaves more than secondPathShare behind (MAX_SECOND_PATHS). The
+    /// result whose finest level ends at the lowest energy is kept. The finest level's
+    /// functional is the same on every path, so the choice is the paper's own criterion. Needs
+    /// two levels or more. On in defaults(), off in paper().
     bool secondPath = false;
     double secondPathShare = DEFAULT_SECOND_PATH_SHARE; ///< in [0, 1]
     bool threaded = true;
@@ -311,22 +314,29 @@ struct MatchResidual
     double farShare = 0;
 };
 
+/// One path through the levels (MatchOptions::secondPath).
+struct PathSummary
+{
+    double coarseVolumeFactor = 1; ///< MultiscaleOptions::coarseVolumeFactor of the path
+    double energy = 0;             ///< at the end of its finest level
+    double farShare = 0;           ///< MatchResidual::farShare of its result
+    /// Its levels, when it is not the kept path (MatchResult::levels holds the kept one's).
+    std::vector<LevelSummary> levels;
+};
+
 /// What MatchOptions::secondPath did.
 struct SecondPathSummary
 {
-    bool requested = false;  ///< secondPath was set
-    bool ran = false;        ///< the first path left part of M1 behind and a second path ran
-    std::string reason;      ///< why it did not run, when requested && !ran
-    double farShare = 0;     ///< of the first path (MatchResidual::farShare)
-    double threshold = 0;    ///< MatchOptions::secondPathShare
-    double volumeFactor = 0; ///< the second path's coarse volume factor
-    /// The finest level's final energy on each path, and the second path's farShare.
-    double firstEnergy = 0, secondEnergy = 0, secondFarShare = 0;
-    bool done = false;       ///< the second path ended (the energies and keptSecond are set)
-    bool keptSecond = false; ///< the second path ended lower and is the result
-    /// The levels of the path that was not kept (MatchResult::levels holds the kept one's).
-    std::vector<LevelSummary> discardedLevels;
-    double seconds = 0; ///< of the second path
+    bool requested = false; ///< secondPath was set
+    bool ran = false;       ///< the first path left part of M1 behind and another path ran
+    std::string reason;     ///< why none ran, when requested && !ran
+    double farShare = 0;    ///< of the first path (MatchResidual::farShare)
+    double threshold = 0;   ///< MatchOptions::secondPathShare
+    /// Every path run, the first one first (filled when another one ran).
+    std::vector<PathSummary> paths;
+    std::size_t kept = 0; ///< index in paths of the result: the lowest energy
+    bool done = false;    ///< the last path ended (every energy and kept are set)
+    double seconds = 0;   ///< of the paths after the first
 };
 
 template <int D> struct MatchResult
@@ -363,8 +373,8 @@ struct MatchObserver
     std::function<void(const LevelSummary&)> levelEnd;
     /// After the automatic landmarks were looked for, before the first level (when requested).
     std::function<void(const AutoLandmarkSummary&)> autoLandmarks;
-    /// Before a second path starts (MatchOptions::secondPath; ran and farShare filled), and
-    /// once more when it ended (energies and keptSecond filled).
+    /// Before each path after the first starts (MatchOptions::secondPath; paths holds those run
+    /// so far, done is false), and once more when the last one ended (done, kept set).
     std::function<void(const SecondPathSummary&)> secondPath;
 };
 

@@ -287,7 +287,7 @@ check coarse-volume-factor-range 3 '' 'coarseVolumeFactor must be finite' -- "$S
 check second-path-value 1 '' "--second-path expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path maybe --quiet
 check second-path-share-range 3 '' 'secondPathShare must be in \[0, 1\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-share 2 --quiet
 FIG=("$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" --levels 4..6 --max-iterations 1 --no-inverse --no-jacobian)
-check second-path-run 0 'second path: .*% of M1 ended farther than sigma from M2 on the first path; energy .* kept the (first|second)' '' -- "${FIG[@]}" -o "$SCRATCH/sp"
+check second-path-run 0 'second path: .*% of M1 ended farther than sigma from M2 on the first path; energies .* kept the (first|second|third) path' '' -- "${FIG[@]}" -o "$SCRATCH/sp"
 check second-path-off 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spoff" --second-path off --quiet
 check second-path-factor 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spcvf" --second-path off --coarse-volume-factor 4 --quiet
 count=$((count + 1))
@@ -299,17 +299,27 @@ assert default["parameters"]["coarseVolumeFactor"] == 1 and default["parameters"
 assert default["secondPath"]["ran"] is False and "reached M2" in default["secondPath"]["reason"], default["secondPath"]
 assert "secondPath" not in paper and "secondPath" not in first
 sp = both["secondPath"]
-assert sp["ran"] and sp["farShare"] > 0.01 and sp["coarseVolumeFactor"] == 4, sp
+assert sp["ran"] and sp["farShare"] > 0.01, sp
+paths = sp["paths"]
+assert 2 <= len(paths) <= 3 and [p["coarseVolumeFactor"] for p in paths] == [1, 4, 16][:len(paths)], paths
 # the first path is the run without it, the second the run with 4x the coarse volume weight
-assert sp["firstEnergy"] == first["result"]["energy"], (sp, first["result"])
-assert sp["secondEnergy"] == second["result"]["energy"], (sp, second["result"])
-assert sp["firstEnergy"] != sp["secondEnergy"]
-assert sp["kept"] == ("second" if sp["secondEnergy"] < sp["firstEnergy"] else "first"), sp
-assert both["result"]["energy"] == min(sp["firstEnergy"], sp["secondEnergy"]), both["result"]
-assert [l["level"] for l in sp["discardedLevels"]] == [4, 5, 6] == [l["level"] for l in both["levels"]]
-kept = first if sp["kept"] == "first" else second
-assert both["result"]["residual"] == kept["result"]["residual"], (both["result"], kept["result"])
-assert both["result"]["residual"]["farShare"] == sp["farShare" if sp["kept"] == "first" else "secondFarShare"]
+assert paths[0]["energy"] == first["result"]["energy"], (paths[0], first["result"])
+assert paths[1]["energy"] == second["result"]["energy"], (paths[1], second["result"])
+assert paths[0]["farShare"] == first["result"]["residual"]["farShare"] == sp["farShare"]
+assert all(p["farShare"] > 0.01 for p in paths[:-1]), paths  # a further path only after a miss
+energies = [p["energy"] for p in paths]
+assert sp["kept"] == energies.index(min(energies)), sp
+assert both["result"]["energy"] == min(energies), both["result"]
+for k, p in enumerate(paths):
+    if k == sp["kept"]:
+        assert p["levels"] is None, p
+    else:
+        assert [l["level"] for l in p["levels"]] == [4, 5, 6] and p["levels"][-1]["energy"] == p["energy"], p
+assert [l["level"] for l in both["levels"]] == [4, 5, 6]
+assert both["result"]["residual"]["farShare"] == paths[sp["kept"]]["farShare"]
+if sp["kept"] < 2:
+    kept = first if sp["kept"] == 0 else second
+    assert both["result"]["residual"] == kept["result"]["residual"], (both["result"], kept["result"])
 PY
 check trial-growth-range 3 '' 'grow must be finite and >= 1' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --trial-growth 0.5 --quiet
 check trial-growth 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/tg" --levels 3..4 --trial-growth 1.5 --quiet

@@ -132,20 +132,35 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                       fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
 }
 
-/// One line on what the second path did (MatchOptions::secondPath), when it starts or ends.
+/// One line on what the second path did (MatchOptions::secondPath), before each further path
+/// and when the last one ended.
 std::string
 secondPathLine(const SecondPathSummary& sp)
 {
-    const std::string head = "second path: " + fixed("%.1f", 100 * sp.farShare) +
-                             "% of M1 ended farther than sigma from M2 on the first path";
+    std::string line = "second path: " + fixed("%.1f", 100 * sp.farShare) +
+                       "% of M1 ended farther than sigma from M2 on the first path";
     if (sp.done) {
-        return head + "; energy " + fixed("%.4g", sp.firstEnergy) + " (first) against " +
-               fixed("%.4g", sp.secondEnergy) + " (second, " +
-               fixed("%.1f", 100 * sp.secondFarShare) + "% far): kept the " +
-               (sp.keptSecond ? "second" : "first");
+        line += "; energies";
+        for (std::size_t k = 0; k < sp.paths.size(); ++k) {
+            const PathSummary& p = sp.paths[k];
+            line += std::string(k ? "," : "") + " " + fixed("%.4g", p.energy) + " (c_vol x" +
+                    formatNumber(p.coarseVolumeFactor) + " below the finest level, " +
+                    fixed("%.1f", 100 * p.farShare) + "% far)";
+        }
+        return line + ": kept the " +
+               (sp.kept == 0   ? std::string("first")
+                : sp.kept == 1 ? "second"
+                               : "third") +
+               " path";
     }
-    return head + " (energy " + fixed("%.4g", sp.firstEnergy) +
-           "): running the levels again with the volume weight x" + formatNumber(sp.volumeFactor) +
+    const PathSummary& last = sp.paths.back();
+    return line +
+           (sp.paths.size() > 1 ? " and on path " + std::to_string(sp.paths.size()) + " (" +
+                                      fixed("%.1f", 100 * last.farShare) + "%)"
+                                : std::string()) +
+           " (energy " + fixed("%.4g", last.energy) +
+           "): running the levels again with the volume weight x" +
+           formatNumber(last.coarseVolumeFactor * SECOND_PATH_VOLUME_FACTOR) +
            " below the finest level";
 }
 
@@ -465,8 +480,10 @@ matchOptionTable()
          "sigma of the finest level from M2 (part of the source left behind by the coarse "
          "levels), run the levels again with " +
              formatNumber(SECOND_PATH_VOLUME_FACTOR) +
-             "x the volume weight below the finest level and keep the result whose finest level "
-             "ends at the lower energy (docs/numerics.md) (default " +
+             "x the volume weight below the finest level, and once more with " +
+             formatNumber(SECOND_PATH_VOLUME_FACTOR * SECOND_PATH_VOLUME_FACTOR) +
+             "x if that path too leaves it behind; keep the result whose finest level ends at "
+             "the lowest energy (docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).secondPath ? "on" : "off") +
              "; --preset paper: off)",
          [](O& o, const std::string& v) {
@@ -476,7 +493,7 @@ matchOptionTable()
          }},
         {"--second-path-share", "X", "Descent",
          "the share of M1's vertices, in [0, 1], that must end farther than sigma from M2 for "
-         "--second-path to run (default " +
+         "--second-path to run another path (default " +
              formatNumber(DEFAULT_SECOND_PATH_SHARE) + ")",
          [](O& o, const std::string& v) {
              o.secondPathShare = parseDouble("--second-path-share", v);
@@ -932,21 +949,24 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["levels"] = levels;
     if (r.secondPath.requested) {
         const SecondPathSummary& sp = r.secondPath;
-        Json discarded = Json::array();
-        for (const LevelSummary& l : sp.discardedLevels)
-            discarded.push_back(levelJson(l));
         j["secondPath"] = Json{{"ran", sp.ran},
                                {"reason", sp.ran ? Json() : Json(sp.reason)},
                                {"farShare", sp.farShare},
                                {"threshold", sp.threshold}};
         if (sp.ran) {
-            j["secondPath"].update(Json{{"coarseVolumeFactor", sp.volumeFactor},
-                                        {"firstEnergy", sp.firstEnergy},
-                                        {"secondEnergy", sp.secondEnergy},
-                                        {"secondFarShare", sp.secondFarShare},
-                                        {"kept", sp.keptSecond ? "second" : "first"},
-                                        {"discardedLevels", discarded},
-                                        {"seconds", sp.seconds}});
+            Json paths = Json::array();
+            for (std::size_t k = 0; k < sp.paths.size(); ++k) {
+                const PathSummary& path = sp.paths[k];
+                Json discarded = Json::array();
+                for (const LevelSummary& l : path.levels)
+                    discarded.push_back(levelJson(l));
+                paths.push_back(Json{{"coarseVolumeFactor", path.coarseVolumeFactor},
+                                     {"energy", path.energy},
+                                     {"farShare", path.farShare},
+                                     {"levels", k == sp.kept ? Json() : discarded}});
+            }
+            j["secondPath"].update(
+                Json{{"paths", paths}, {"kept", sp.kept}, {"seconds", sp.seconds}});
         }
     }
     const solver::Report* last = r.levels.empty() ? nullptr : &r.levels.back().report;
