@@ -147,11 +147,8 @@ secondPathLine(const SecondPathSummary& sp)
                     formatNumber(p.coarseVolumeFactor) + " below the finest level, " +
                     fixed("%.1f", 100 * p.farShare) + "% far)";
         }
-        return line + ": kept the " +
-               (sp.kept == 0   ? std::string("first")
-                : sp.kept == 1 ? "second"
-                               : "third") +
-               " path";
+        return line + ": kept path " + std::to_string(sp.kept + 1) + " of " +
+               std::to_string(sp.paths.size());
     }
     const PathSummary& last = sp.paths.back();
     return line +
