@@ -480,18 +480,22 @@ checkSecondPath(Real ax, Real ay, int iterations)
         EXPECT_EQ(path.energy, r.levels.back().report.energy) << k;
         EXPECT_EQ(path.farShare, r.residual.farShare) << k;
         // A further path only after one that left more than the share behind.
-        if (k + 1 < sp.paths.size()) EXPECT_GT(path.farShare, DEFAULT_SECOND_PATH_SHARE) << k;
+        if (k + 1 < sp.paths.size()) {
+            EXPECT_GT(path.farShare, DEFAULT_SECOND_PATH_SHARE) << k;
+        }
         EXPECT_EQ(path.levels.size(), k == sp.kept ? 0u : 3u) << k;
-        if (k != sp.kept && !path.levels.empty())
+        if (k != sp.kept && !path.levels.empty()) {
             EXPECT_EQ(path.levels.back().report.energy, r.levels.back().report.energy) << k;
+        }
         if (path.energy < lowest) {
             lowest = path.energy;
             argmin = k;
         }
         factor *= SECOND_PATH_VOLUME_FACTOR;
     }
-    if (sp.paths.size() < std::size_t(1 + MAX_SECOND_PATHS)) // stopped: the last one reached M2
+    if (sp.paths.size() < std::size_t(1 + MAX_SECOND_PATHS)) { // stopped: the last reached M2
         EXPECT_LE(sp.paths.back().farShare, DEFAULT_SECOND_PATH_SHARE);
+    }
     EXPECT_EQ(sp.kept, argmin);
     const MatchResult<2>& kept = single[sp.kept];
     EXPECT_EQ(all.levels.back().report.energy, lowest);
