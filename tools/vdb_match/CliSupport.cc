@@ -75,6 +75,14 @@ parseDouble(const std::string& option, const std::string& text)
     return x;
 }
 
+bool
+parseOnOff(const std::string& option, const std::string& text)
+{
+    if (text != "on" && text != "off")
+        throw UsageError(option + " expects 'on' or 'off', got '" + text + "'");
+    return text == "on";
+}
+
 int
 parseInt(const std::string& option, const std::string& text)
 {

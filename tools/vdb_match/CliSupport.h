@@ -160,6 +160,9 @@ void createOutputDirectory(const std::string& dir);
 /// @throw UsageError if @a text is not one
 double parseDouble(const std::string& option, const std::string& text);
 int parseInt(const std::string& option, const std::string& text);
+/// Parses an on|off switch for option @a option.
+/// @throw UsageError if @a text is neither
+bool parseOnOff(const std::string& option, const std::string& text);
 /// Largest --threads accepted (0 = all cores); TBB allocates per requested thread.
 constexpr int MAX_THREADS = 1024;
 /// Parses --threads: an integer in [0, MAX_THREADS].

@@ -345,11 +345,7 @@ matchOptionTable()
          "--auto-landmark-levels levels (docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoLandmarks ? "on" : "off") +
              "; --preset paper: off)",
-         [](O& o, const std::string& v) {
-             if (v != "on" && v != "off")
-                 throw UsageError("--auto-landmarks expects 'on' or 'off', got '" + v + "'");
-             o.autoLandmarks = v == "on";
-         }},
+         [](O& o, const std::string& v) { o.autoLandmarks = parseOnOff("--auto-landmarks", v); }},
         {"--auto-landmark-levels", "N", "Landmarks (an addition to the paper)",
          "levels, from the first, at which the automatic landmarks act, >= 1 (default " +
              std::to_string(d.autoLandmarkLevels) + ")",
@@ -370,11 +366,7 @@ matchOptionTable()
          "the same points either way round; docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
              "; --preset paper: off)",
-         [](O& o, const std::string& v) {
-             if (v != "on" && v != "off")
-                 throw UsageError("--auto-anchors expects 'on' or 'off', got '" + v + "'");
-             o.autoAnchors = v == "on";
-         }},
+         [](O& o, const std::string& v) { o.autoAnchors = parseOnOff("--auto-anchors", v); }},
         {"--anchor-weight", "X", "Landmarks (an addition to the paper)",
          "c_an, the total weight of the automatic anchors, >= 0 (default " +
              both(DEFAULT_ANCHOR_WEIGHT_3D, DEFAULT_ANCHOR_WEIGHT_2D) + ")",
@@ -483,11 +475,7 @@ matchOptionTable()
              "the lowest energy (docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).secondPath ? "on" : "off") +
              "; --preset paper: off)",
-         [](O& o, const std::string& v) {
-             if (v != "on" && v != "off")
-                 throw UsageError("--second-path expects 'on' or 'off', got '" + v + "'");
-             o.secondPath = v == "on";
-         }},
+         [](O& o, const std::string& v) { o.secondPath = parseOnOff("--second-path", v); }},
         {"--second-path-share", "X", "Descent",
          "the share of M1's vertices, in [0, 1], that must end farther than sigma from M2 for "
          "--second-path to run another path (default " +
