@@ -188,6 +188,30 @@ TEST(Match, CircleToEllipse2D)
     checkMatch<2>(circle, ellipse, opts);
 }
 
+TEST(Match, WiderCoarseBandStaysOnFineCells)
+{
+    // With sigma = 3h below the finest level (MultiscaleOptions::coarseSigmaFactor), the fine
+    // region of those levels widens with it: checkMatch asserts that no band simplex of any
+    // level falls on a coarse cell, and the coarse levels refine more than with sigma = 2h.
+    const Surface<2> circle = ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
+    const Surface<2> ellipse = ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 6;
+    opts.multiscale.coarseSigmaFactor = 1.5;
+    checkMatch<2>(circle, ellipse, opts);
+    const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+    opts.multiscale.descent.maxIterations = 0; // the lattices only
+    const MatchResult<2> wide = match<2>(circle, ellipse, placement, opts);
+    opts.multiscale.coarseSigmaFactor = 1;
+    const MatchResult<2> paper = match<2>(circle, ellipse, placement, opts);
+    ASSERT_EQ(wide.levels.size(), 3u);
+    // Level 4 is dense either way (the shapes fill the box at h = 1/16); level 5 is not.
+    EXPECT_EQ(wide.levels[0].lattice.nodes, wide.levels[0].lattice.denseNodes);
+    EXPECT_GT(wide.levels[1].lattice.nodes, paper.levels[1].lattice.nodes);
+    EXPECT_LT(wide.levels[1].lattice.nodes, wide.levels[1].lattice.denseNodes);
+}
+
 TEST(Match, SphereToEllipsoid3D)
 {
     const Surface<3> sphere = ellipsoidMesh(Vec<3>(0, 0, 0), Vec<3>(1, 1, 1), 40, 80);

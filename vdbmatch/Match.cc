@@ -538,7 +538,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             // A band term lives on a simplex whose centroid x has |d1(x)| < sigma (direct half;
             // d1 does not depend on phi, so this region is exact) or |d2(phi(x))| < sigma
             // (inverse half; phi moves during the level, hence the margin).
-            const Real sigma = opts.multiscale.energy.sigmaFactor * h;
+            const Real sigma = opts.multiscale.energyAt(l).sigmaFactor * h;
             const Real reach1 = sigma;
             const Real reach2 = sigma + opts.refinementMarginCells * h;
             std::unique_ptr<multiscale::PiecewiseLinearInterpolator<D>> previous;

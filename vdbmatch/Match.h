@@ -3,7 +3,8 @@
 ///        in Omega = (0,1)^d, per-level signed distances and adaptive lattices, the multiscale
 ///        descent, and the matching residual of the result.
 ///
-/// For l = minLevel..maxLevel (h_l = 2^-l, sigma = 2 h_l):
+/// For l = minLevel..maxLevel (h_l = 2^-l, sigma = 2 h_l, or 2 F h_l below the finest level with
+/// MultiscaleOptions::coarseSigmaFactor F):
 /// 1. the signed distances d1, d2 of the placed shapes are rebuilt at h_l (buildShapeSampler:
 ///    an exact narrow band at h_l over coarser tiers that cover all of Omega, so that d2 can be
 ///    sampled at phi(x) anywhere);

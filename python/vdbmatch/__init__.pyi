@@ -65,6 +65,7 @@ def match(
     c_bend: float | None = None,
     c_vol: float | None = None,
     coarse_volume_factor: float | None = None,
+    coarse_sigma_factor: float | None = None,
     q: float | None = None,
     theta: float | None = None,
     tau: float | None = None,

@@ -284,6 +284,19 @@ check coarse-membrane-factor-number 1 '' "--coarse-membrane-factor expects a fin
 # report. A run that reaches its target reports why no second path ran; one step per level
 # (levels 4..6) leaves the figure's arms behind, and the second path runs.
 check coarse-volume-factor-range 3 '' 'coarseVolumeFactor must be finite' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-volume-factor -1 --quiet
+# The coarse sigma factor (an addition to the paper): range, report, metadata, per-level sigma.
+check coarse-sigma-factor-range 3 '' 'coarseSigmaFactor must be in \[0.5, 3\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --coarse-sigma-factor 4 --quiet
+check coarse-sigma-factor 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/csf" --levels 3..4 --coarse-sigma-factor 1.5 --quiet
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/csf" "$SCRATCH/m3" <<'PY'; then echo "ok   coarse-sigma-factor-report"; else fail "coarse-sigma-factor-report"; fi
+import json, sys
+wide, default = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+assert wide["parameters"]["coarseSigmaFactor"] == 1.5 and default["parameters"]["coarseSigmaFactor"] == 1
+assert [(l["level"], l["sigma"]) for l in wide["levels"]] == [(3, 3 / 8), (4, 2 / 16)], wide["levels"]
+assert all(l["sigma"] == 2 * l["h"] for l in default["levels"]), default["levels"]
+import pyopenvdb
+assert pyopenvdb.readAllGridMetadata(sys.argv[1] + "/deformation.vdb")[0]["vdbmatch_coarse_sigma_factor"] == 1.5
+PY
 check second-path-value 1 '' "--second-path expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path maybe --quiet
 check second-path-share-range 3 '' 'secondPathShare must be in \[0, 1\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-share 2 --quiet
 FIG=("$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" --levels 4..6 --max-iterations 1 --no-inverse --no-jacobian)

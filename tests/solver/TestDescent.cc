@@ -392,6 +392,46 @@ TEST(Descent, CoarseVolumeFactorWeighsTheVolumeBelowTheFinestLevelOnly)
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
 }
 
+TEST(Descent, CoarseSigmaFactorWidensTheBandBelowTheFinestLevelOnly)
+{
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    EXPECT_EQ(opts.coarseSigmaFactor, 1.0); // tab:parameters: sigma = 2h at every level
+    opts.minLevel = 4;
+    opts.maxLevel = 7;
+    opts.coarseSigmaFactor = 1.5;
+    for (int l = 4; l <= 7; ++l) {
+        const EnergyParameters p = opts.energyAt(l);
+        EXPECT_EQ(p.sigmaFactor, l < 7 ? 3.0 : 2.0) << l;
+        EXPECT_EQ(p.cMatch, opts.energy.cMatch) << l;
+        EXPECT_EQ(p.cVol, opts.energy.cVol) << l;
+    }
+    // The driver builds each level's energy from energyAt: without descent steps every level
+    // starts and ends at the identity, where its energy is that of sigma = 3h below the finest
+    // level (with the weights sigma^-q of eq:EsymMatch and sigma^theta of eq:EsymVol that
+    // follow) and of the paper's sigma = 2h at the finest.
+    opts.descent.maxIterations = 0;
+    Problem<2> problem(opts.energy);
+    const MultiscaleResult<2> result = MultiscaleDriver<2>(opts).run(problem.denseLevels());
+    ASSERT_EQ(result.reports.size(), 4u);
+    for (int l = 4; l <= 7; ++l) {
+        const SimplexLattice<2> lattice = SimplexLattice<2>::dense(l);
+        const NodeVectors<2> identity = NodeVectors<2>::Zero(2, lattice.nodeCount());
+        const auto energyWith = [&](Real sigmaFactor) {
+            EnergyParameters p = opts.energy;
+            p.sigmaFactor = sigmaFactor;
+            return Energy<2>(lattice, *problem.shape1, *problem.shape2, p, opts.kind)
+                .value(identity);
+        };
+        const Real wide = energyWith(3), paper = energyWith(2);
+        ASSERT_NE(wide, paper) << l;
+        EXPECT_EQ(result.reports[std::size_t(l - 4)].initialEnergy, l < 7 ? wide : paper) << l;
+    }
+    for (const Real bad : {0.25, 3.5, std::numeric_limits<Real>::quiet_NaN()}) {
+        opts.coarseSigmaFactor = bad;
+        EXPECT_THROW(opts.validate(), openvdb::ValueError) << bad;
+    }
+}
+
 TEST(Descent, MembraneSaturationActsAtTheFirstLevelsOnly)
 {
     // As above: no descent steps, so the runs differ only in the energy of each level.

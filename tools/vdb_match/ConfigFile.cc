@@ -28,6 +28,7 @@ configKeys()
         {"cBend", "--c-bend"},
         {"cVol", "--c-vol"},
         {"coarseVolumeFactor", "--coarse-volume-factor"},
+        {"coarseSigmaFactor", "--coarse-sigma-factor"},
         {"q", "--q"},
         {"theta", "--theta"},
         {"tau", "--tau"},

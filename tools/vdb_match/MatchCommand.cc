@@ -66,6 +66,7 @@ struct MatchCliOptions
     std::optional<double> cMatch, cMem, cBend, cVol, q, theta;
     std::optional<double> coarseMembraneFactor; ///< default per preset (MatchOptions)
     std::optional<double> coarseVolumeFactor;
+    std::optional<double> coarseSigmaFactor;
     std::optional<double> membraneSaturation; ///< default per preset (MatchOptions)
     std::optional<int> membraneSaturationLevels;
     double tau = EnergyParameters().tau;
@@ -314,6 +315,12 @@ matchOptionTable()
          "the finest level by c_vol (default 1)",
          [](O& o, const std::string& v) {
              o.coarseVolumeFactor = parseDouble("--coarse-volume-factor", v);
+         }},
+        {"--coarse-sigma-factor", "F", "Energy (paper tab:parameters)",
+         "an addition to the paper: the levels below the finest use the band width sigma = 2 F h, "
+         "the finest level sigma = 2h; in [0.5, 3] (default 1)",
+         [](O& o, const std::string& v) {
+             o.coarseSigmaFactor = parseDouble("--coarse-sigma-factor", v);
          }},
         {"--q", "X", "Energy (paper tab:parameters)",
          "matching exponent, weight sigma^-q (default " + both(p3.q, p2.q) + ")" +
@@ -826,6 +833,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params["coarseMembraneFactor"] = opts.multiscale.coarseMembraneFactor;
     params["membraneSaturationLevels"] = opts.multiscale.membraneSaturationLevels;
     params["coarseVolumeFactor"] = opts.multiscale.coarseVolumeFactor;
+    params["coarseSigmaFactor"] = opts.multiscale.coarseSigmaFactor;
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
@@ -894,13 +902,13 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                               {"meanWorld", r.landmarks.meanWorld},
                               {"maxWorld", r.landmarks.maxWorld}};
     }
-    const auto levelJson = [&p](const LevelSummary& l) {
+    const auto levelJson = [&opts](const LevelSummary& l) {
         const solver::Report& rep = l.report;
         const double h = std::ldexp(1.0, -l.level);
         return Json{
             {"level", l.level},
             {"h", h},
-            {"sigma", p.sigmaFactor * h},
+            {"sigma", opts.multiscale.energyAt(l.level).sigmaFactor * h},
             {"cells", l.lattice.cells},
             {"simplices", l.lattice.simplices},
             {"nodes", l.lattice.nodes},
@@ -1000,6 +1008,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.cBend) p.cBend = *o.cBend;
     if (o.cVol) p.cVol = *o.cVol;
     if (o.coarseVolumeFactor) opts.multiscale.coarseVolumeFactor = *o.coarseVolumeFactor;
+    if (o.coarseSigmaFactor) opts.multiscale.coarseSigmaFactor = *o.coarseSigmaFactor;
     if (o.q) p.q = *o.q;
     if (o.theta) p.theta = *o.theta;
     p.tau = o.tau;
@@ -1214,6 +1223,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     deformation->insertMeta("vdbmatch_c_vol", openvdb::DoubleMetadata(p.cVol));
     deformation->insertMeta("vdbmatch_coarse_volume_factor",
                             openvdb::DoubleMetadata(opts.multiscale.coarseVolumeFactor));
+    deformation->insertMeta("vdbmatch_coarse_sigma_factor",
+                            openvdb::DoubleMetadata(opts.multiscale.coarseSigmaFactor));
     deformation->insertMeta("vdbmatch_q", openvdb::DoubleMetadata(p.q));
     deformation->insertMeta("vdbmatch_theta", openvdb::DoubleMetadata(p.theta));
     deformation->insertMeta("vdbmatch_tau", openvdb::DoubleMetadata(p.tau));

@@ -54,6 +54,12 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: coarseVolumeFactor must be finite and in [0, "
                           << MAX_COEFFICIENT << "], got " << coarseVolumeFactor);
+    if (!(coarseSigmaFactor >= MIN_COARSE_SIGMA_FACTOR &&
+          coarseSigmaFactor <= MAX_COARSE_SIGMA_FACTOR))
+        OPENVDB_THROW(openvdb::ValueError, "MultiscaleOptions: coarseSigmaFactor must be in ["
+                                               << MIN_COARSE_SIGMA_FACTOR << ", "
+                                               << MAX_COARSE_SIGMA_FACTOR << "], got "
+                                               << coarseSigmaFactor);
     if (membraneSaturationLevels < 0)
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: membraneSaturationLevels must be >= 0, got "
@@ -73,6 +79,7 @@ MultiscaleOptions::energyAt(int level) const
     if (level < maxLevel) {
         p.cMem *= coarseMembraneFactor;
         p.cVol *= coarseVolumeFactor;
+        p.sigmaFactor *= coarseSigmaFactor;
     }
     if (level >= minLevel + membraneSaturationLevels) p.membraneSaturation = 0;
     return p;

@@ -119,6 +119,17 @@ struct MultiscaleOptions
     /// which a coarse level can leave part of a limb behind; match()'s second path
     /// (MatchOptions::secondPath) uses it. The finest level's functional does not depend on it.
     Real coarseVolumeFactor = 1;
+    /// Band width below the finest level, an addition to the paper (the sigma/h schedule):
+    /// levels l < maxLevel use sigma = coarseSigmaFactor * energy.sigmaFactor * h_l, with the
+    /// weights sigma^-q of eq:EsymMatch and sigma^theta of eq:EsymVol and the metric's
+    /// tau sigma^2 that follow from it; the finest level the paper's sigma = 2h (in
+    /// [MIN_COARSE_SIGMA_FACTOR, MAX_COARSE_SIGMA_FACTOR]; 1: the paper). Measured on the
+    /// accuracy benchmark and not a default (docs/numerics.md "Band width below the finest
+    /// level"). The largest factor keeps sigma = 6h within the exact 8-voxel band of the
+    /// distances (DistanceField.h).
+    Real coarseSigmaFactor = 1;
+    static constexpr Real MIN_COARSE_SIGMA_FACTOR = 0.5;
+    static constexpr Real MAX_COARSE_SIGMA_FACTOR = 3;
     /// Levels, from minLevel, at which energy.membraneSaturation acts (>= 0): levels
     /// l < minLevel + membraneSaturationLevels saturate the membrane densities, the finer ones
     /// use the paper's W. An addition to the paper (math/Saturation.h): the coarse levels choose
@@ -126,9 +137,9 @@ struct MultiscaleOptions
     /// it.
     int membraneSaturationLevels = 2;
 
-    /// The energy coefficients at level l: `energy`, with c_mem and c_vol scaled by
-    /// coarseMembraneFactor and coarseVolumeFactor below the finest level, and the membrane
-    /// saturation only at the first membraneSaturationLevels levels.
+    /// The energy coefficients at level l: `energy`, with c_mem, c_vol and sigma/h scaled by
+    /// coarseMembraneFactor, coarseVolumeFactor and coarseSigmaFactor below the finest level,
+    /// and the membrane saturation only at the first membraneSaturationLevels levels.
     EnergyParameters energyAt(int level) const;
 
     /// tab:parameters for dimension 2 (Jump: levels 4..9) or 3 (Dolphin, Starfish: 4..8).
