@@ -11,8 +11,9 @@ One --pair for all runs, or one per run (in the same order). PAIRDIR is a pair o
 target_resampled.polyline); FORWARD_DIR a vdb_match match output of that pair from source to
 the resampled target (deformed.obj, report.json), e.g. a bench/bench_accuracy.sh
 runs/PAIR/symmetric/forward. Errors are in units of 10^-3 of the unit box (the match's
-placement, as score.py and docs/results.md). One panel per run, side by side, one colour scale.
-Exit status 2 for bad usage or unreadable input (a 3D pair included).
+placement, as score.py and docs/results.md). One panel per run, --columns per row, one colour
+scale. Prints one line per run, "LABEL PAIR err MEAN motion MOTION ratio R", then the path of
+the picture. Exit status 2 for bad usage or unreadable input (a 3D pair included).
 """
 
 import argparse
@@ -31,7 +32,7 @@ def fail(message):
     sys.exit(2)
 
 
-def main():
+def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--pair", action="append", required=True)
     ap.add_argument("--run", action="append", required=True, metavar="LABEL=FORWARD_DIR")
@@ -40,7 +41,7 @@ def main():
     ap.add_argument("--columns", type=int, default=3, help="panels per row (default 3)")
     ap.add_argument("--vmax", type=float, help="top of the colour scale, x 1e-3 of the box "
                     "(default: the largest 98th percentile of the runs)")
-    a = ap.parse_args()
+    a = ap.parse_args(argv)
     if a.every < 1 or a.columns < 1:
         fail("--every and --columns must be >= 1")
     if len(a.pair) not in (1, len(a.run)):
@@ -68,6 +69,10 @@ def main():
                          target, pair["name"]))
     except (OSError, ValueError, KeyError) as e:
         fail(str(e))
+
+    for label, _, err, motion, _, _, name in runs:
+        print("%s %s err %.4g motion %.4g ratio %.3f" % (label, name, err.mean(), motion,
+                                                          err.mean() / motion))
 
     import matplotlib
     matplotlib.use("Agg")
