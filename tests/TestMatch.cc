@@ -175,13 +175,24 @@ checkMatch(const Surface<D>& source, const Surface<D>& target, const MatchOption
     }
 }
 
+/// The 2D pair of CircleToEllipse2D, in world units on purpose: the placement maps them into
+/// the unit box.
+Surface<2>
+worldCircle()
+{
+    return ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
+}
+Surface<2>
+worldEllipse()
+{
+    return ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+}
+
 } // namespace
 
 TEST(Match, CircleToEllipse2D)
 {
-    // World units on purpose: the placement maps them into the unit box.
-    const Surface<2> circle = ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
-    const Surface<2> ellipse = ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
     MatchOptions opts = MatchOptions::defaults(2);
     opts.multiscale.minLevel = 4;
     opts.multiscale.maxLevel = 7;
@@ -193,8 +204,7 @@ TEST(Match, WiderCoarseBandStaysOnFineCells)
     // With sigma = 3h below the finest level (MultiscaleOptions::coarseSigmaFactor), the fine
     // region of those levels widens with it: checkMatch asserts that no band simplex of any
     // level falls on a coarse cell, and the coarse levels refine more than with sigma = 2h.
-    const Surface<2> circle = ellipseCurve(Vec<2>(3.0, -1.0), 2.0, 2.0, 400);
-    const Surface<2> ellipse = ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
     MatchOptions opts = MatchOptions::defaults(2);
     opts.multiscale.minLevel = 4;
     opts.multiscale.maxLevel = 6;
