@@ -317,8 +317,9 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.maxMotion = std::max(out.maxMotion, motion);
         leastMotion = std::min(leastMotion, motion);
     }
-    out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energy.sigmaFactor *
-                    std::ldexp(1.0, -opts.multiscale.minLevel);
+    const int first = opts.multiscale.minLevel;
+    out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
+                    std::ldexp(1.0, -first);
     if (!(out.maxMotion > out.minMotion)) {
         std::ostringstream s;
         s << "every extremity moves by less than " << opts.autoLandmarkMinMotion
