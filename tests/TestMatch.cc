@@ -236,6 +236,33 @@ TEST(Match, SphereToEllipsoid3D)
     checkMatch<3>(sphere, ellipsoid, opts);
 }
 
+TEST(Match, HeavierMetricIs2DDefaultAndChangesThePathNotTheEnergy)
+{
+    // The descent's H1 metric weight (solver/H1Metric.h; the paper gives none): 2 sigma^2 by
+    // default in 2D, sigma^2 / 2 in 3D and in the paper's experiment.
+    EXPECT_EQ(MatchOptions::defaults(2).multiscale.metricTauFactor, DEFAULT_MATCH_METRIC_TAU_2D);
+    EXPECT_NE(DEFAULT_MATCH_METRIC_TAU_2D, solver::DEFAULT_METRIC_TAU_FACTOR);
+    EXPECT_EQ(MatchOptions::defaults(3).multiscale.metricTauFactor,
+              solver::DEFAULT_METRIC_TAU_FACTOR);
+    EXPECT_EQ(MatchOptions::paper(2).multiscale.metricTauFactor, solver::DEFAULT_METRIC_TAU_FACTOR);
+    EXPECT_EQ(MatchOptions::paper(3).multiscale.metricTauFactor, solver::DEFAULT_METRIC_TAU_FACTOR);
+
+    // The same energy at the start (the identity on level 4), a different path: the level ends
+    // elsewhere, lower.
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 4;
+    const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+    const MatchResult<2> heavy = match<2>(circle, ellipse, placement, opts);
+    opts.multiscale.metricTauFactor = solver::DEFAULT_METRIC_TAU_FACTOR;
+    const MatchResult<2> light = match<2>(circle, ellipse, placement, opts);
+    ASSERT_TRUE(heavy.isComplete() && light.isComplete());
+    EXPECT_EQ(heavy.levels[0].report.initialEnergy, light.levels[0].report.initialEnergy);
+    EXPECT_GT((heavy.displacement - light.displacement).cwiseAbs().maxCoeff(), 1e-4);
+    EXPECT_LT(heavy.levels[0].report.energy, heavy.levels[0].report.initialEnergy);
+}
+
 TEST(Match, MembraneSaturationAtTheFirstTwoLevelsIsThe3DDefault)
 {
     // An addition to the paper (math/Saturation.h): the 3D default, not the 2D one, and never
@@ -486,6 +513,9 @@ checkSecondPath(Real ax, Real ay, int iterations)
     opts.multiscale.minLevel = 3;
     opts.multiscale.maxLevel = 5;
     opts.multiscale.descent.maxIterations = iterations;
+    // The lighter metric of 3D: with the 2D default (DEFAULT_MATCH_METRIC_TAU_2D) one or two
+    // steps per level already bring the circle within sigma of the ellipse.
+    opts.multiscale.metricTauFactor = solver::DEFAULT_METRIC_TAU_FACTOR;
     opts.threaded = false;
     const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
     const MatchResult<2> all = match<2>(circle, ellipse, placement, opts);

@@ -127,6 +127,7 @@ MatchOptions::defaults(int dim)
     opts.multiscale.energy.membraneSaturation =
         dim == 2 ? DEFAULT_MATCH_MEMBRANE_SATURATION_2D : DEFAULT_MATCH_MEMBRANE_SATURATION_3D;
     opts.multiscale.membraneSaturationLevels = DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS;
+    if (dim == 2) opts.multiscale.metricTauFactor = DEFAULT_MATCH_METRIC_TAU_2D;
     opts.autoLandmarks = true;
     opts.autoAnchors = true;
     opts.secondPath = true;

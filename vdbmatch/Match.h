@@ -127,6 +127,16 @@ constexpr double DEFAULT_MATCH_MEMBRANE_SATURATION_2D = 0;
 /// match() counts these levels from coarsestLevel, the first of the requested range, so that a run
 /// resumed or refined from an earlier result (--init) saturates no level the earlier run did not.
 constexpr int DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS = 2;
+/// Default MultiscaleOptions::metricTauFactor of match() in 2D (--metric-tau): the weight of the
+/// descent's H1 metric, tau = 2 sigma^2 instead of solver::DEFAULT_METRIC_TAU_FACTOR = 1/2 (3D and
+/// --preset paper; the paper says "weighted H^1 metric" and gives no weight). It changes the path
+/// of the descent, not the energy: a smoother descent direction moves the limbs more as a whole.
+/// Measured on the eight 2D pairs of the correspondence benchmark over five runs (docs/numerics.md
+/// "Metric weight"): mean |phi(v) - g(v)| lower on 6 of 8 (geometric mean of the ratios 0.967; the
+/// star jump -12%, the articulated figure -7%; the squat +1.5%, the stretch +1%), |psi o phi - Id|
+/// 0.89, time 0.89. In 3D the same change was a wash (error 1.006, |psi o phi - Id| 0.994) and
+/// costs CG iterations, so 3D keeps 1/2.
+constexpr double DEFAULT_MATCH_METRIC_TAU_2D = 2;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not
 /// be exact (12 instead of 31 CG iterations per solve at level 7, same residual and energy).
 constexpr double DEFAULT_MATCH_METRIC_TOLERANCE = 1e-2;

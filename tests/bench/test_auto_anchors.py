@@ -4,8 +4,9 @@ on benchmark pairs with a known map (bench/accuracy/make_pairs.py), levels 4..7 
   body, which the true map keeps still, coincides in both shapes; the anchors must hold it: the
   error on the vertices g keeps still falls several-fold, and the error over all vertices too;
 - the figure's legs spread 25 degrees: the feet move by just under sigma of level 4, the old
-  threshold of the landmarks (--auto-landmark-min-motion 1); without them the legs are not
-  reached, with them (by default, on every pair) they are."""
+  threshold of the landmarks (--auto-landmark-min-motion 1); without them the legs are reached
+  only by the second path and with twice the error, with them (by default, on every pair) the
+  first path reaches them."""
 
 import json
 import os
@@ -95,10 +96,13 @@ def test_landmarks_on_every_pair_reach_the_spread_legs(legs):
     assert 0.1 < new["autoLandmarks"]["maxMotion"] < 0.125, new["autoLandmarks"]
     assert not old["autoLandmarks"]["used"] and new["autoLandmarks"]["used"]
     assert new["autoLandmarks"]["anchors"] > 0
-    # Measured: 44.7e-3 (1.13x the motion) without, 11.5e-3 (0.29x) with.
-    assert e_old.mean() > 0.8 * motion, (e_old.mean(), motion)
+    # Measured (2D metric weight 2 sigma^2): 25.0e-3 (0.63x the motion) without, 12.9e-3 (0.33x)
+    # with. Without them the first path leaves the feet behind (2.4% of M1 farther than sigma)
+    # and only the second path reaches them; with them the first path does.
+    assert e_old.mean() > 0.5 * motion, (e_old.mean(), motion)
     assert e_new.mean() < 0.4 * motion, (e_new.mean(), motion)
-    # ... and the fit: mean residual 1.5e-3 without (the legs not reached), 0.28e-3 with.
-    assert old["result"]["residual"]["meanUnit"] > 3 * new["result"]["residual"]["meanUnit"]
+    assert e_new.mean() < 0.6 * e_old.mean(), (e_new.mean(), e_old.mean())
+    assert old["secondPath"]["ran"] and not new["secondPath"]["ran"], (old["secondPath"],
+                                                                        new["secondPath"])
     assert new["result"]["residual"]["meanUnit"] < 0.5 * 2.0 ** -7
     assert new["result"]["minJacobian"] > 0

@@ -84,7 +84,7 @@ struct MatchCliOptions
     int surfaceFromLevel = MatchOptions::defaults(3).multiscale.surfaceFromLevel;
     double gradientTolerance =
         MatchOptions::defaults(3).multiscale.descent.relativeGradientTolerance;
-    double metricTau = MatchOptions::defaults(3).multiscale.metricTauFactor;
+    std::optional<double> metricTau; ///< default per dimension and preset (MatchOptions)
     double metricTolerance = MatchOptions::defaults(3).multiscale.metric.cgTolerance;
     solver::DescentMethod method = MatchOptions::defaults(3).multiscale.descent.method;
     bool initialStepFromSlope = MatchOptions::defaults(3).multiscale.descent.initialStepFromSlope;
@@ -438,8 +438,11 @@ matchOptionTable()
              o.gradientTolerance = parseDouble("--gradient-tolerance", v);
          }},
         {"--metric-tau", "X", "Descent",
-         "weight of the H1 metric M + tau L as a factor of sigma^2 (default " +
-             formatNumber(d.metricTau) + ")",
+         "weight of the H1 metric M + tau L as a factor of sigma^2, >= 0 (default " +
+             both(MatchOptions::defaults(3).multiscale.metricTauFactor,
+                  MatchOptions::defaults(2).multiscale.metricTauFactor) +
+             "; --preset paper: " +
+             formatNumber(MatchOptions::paper(2).multiscale.metricTauFactor) + ")",
          [](O& o, const std::string& v) { o.metricTau = parseDouble("--metric-tau", v); }},
         {"--optimizer", "NAME", "Descent",
          "ncg (the paper's nonlinear conjugate gradients) or lbfgs (limited-memory BFGS in the "
@@ -1025,7 +1028,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
                                                << opts.multiscale.minLevel << ".."
                                                << opts.multiscale.maxLevel);
     }
-    opts.multiscale.metricTauFactor = o.metricTau;
+    if (o.metricTau) opts.multiscale.metricTauFactor = *o.metricTau;
     opts.multiscale.metric.cgTolerance = o.metricTolerance;
     opts.multiscale.descent.method = o.method;
     opts.multiscale.descent.initialStepFromSlope = o.initialStepFromSlope;

@@ -32,7 +32,9 @@
 /// descent direction is the L2 gradient smoothed over the scale of the band terms of the level;
 /// coarser scales are handled by the coarser levels. Measured (tests/solver/TestDescent.cc
 /// problems): factors 0.125 to 8 give final energies within 0.5% of each other; 0.5 gave the
-/// lowest, 0.125 the cheapest metric solves (half the CG iterations).
+/// lowest, 0.125 the cheapest metric solves (half the CG iterations). match() uses 2 in 2D
+/// (Match.h DEFAULT_MATCH_METRIC_TAU_2D: closer to the true map on the correspondence benchmark,
+/// docs/numerics.md "Metric weight").
 ///
 /// P^T G P is assembled once, when the metric is built: a compressed-row matrix on the unknowns,
 /// one row per free node, built in parallel over the rows from the cells around the node and
