@@ -318,7 +318,10 @@ matchOptionTable()
          }},
         {"--coarse-sigma-factor", "F", "Energy (paper tab:parameters)",
          "an addition to the paper: the levels below the finest use the band width sigma = 2 F h, "
-         "the finest level sigma = 2h; in [0.5, 3] (default 1)",
+         "the finest level sigma = 2h; in [" +
+             formatNumber(multiscale::MultiscaleOptions::MIN_COARSE_SIGMA_FACTOR) + ", " +
+             formatNumber(multiscale::MultiscaleOptions::MAX_COARSE_SIGMA_FACTOR) + "] (default " +
+             formatNumber(multiscale::MultiscaleOptions().coarseSigmaFactor) + ")",
          [](O& o, const std::string& v) {
              o.coarseSigmaFactor = parseDouble("--coarse-sigma-factor", v);
          }},
