@@ -97,6 +97,13 @@ checkMatch(const Surface<D>& source, const Surface<D>& target, const MatchOption
     EXPECT_LT(result.residual.meanUnit, finest.h() / 2);
     EXPECT_NEAR(result.residual.meanWorld, placement.toWorldLength(result.residual.meanUnit),
                 1e-12);
+    // ... and its mirror over M2's vertices: phi(M1) reaches all of M2.
+    std::printf("[ target residual ] mean %.3e, max %.3e (unit box); %.2f%% farther than sigma\n",
+                result.targetResidual.meanUnit, result.targetResidual.maxUnit,
+                100 * result.targetResidual.farShare);
+    EXPECT_EQ(result.targetResidual.samples, target.points.size());
+    EXPECT_LT(result.targetResidual.meanUnit, finest.h() / 2);
+    EXPECT_EQ(result.targetResidual.farShare, 0.0);
 
     // The symmetric energy of the result is below its value at the identity (same lattice
     // and fields as the last level).
@@ -277,6 +284,148 @@ TEST(Match, MembraneSaturationAtTheFirstTwoLevelsIsThe3DDefault)
     EXPECT_EQ(d2.multiscale.energy.membraneSaturation, DEFAULT_MATCH_MEMBRANE_SATURATION_2D);
     EXPECT_EQ(MatchOptions::paper(3).multiscale.energy.membraneSaturation, 0.0);
     EXPECT_EQ(MatchOptions::paper(2).multiscale.energy.membraneSaturation, 0.0);
+}
+
+/// MatchResult::targetResidual is dist(y, phi(M1)) over M2's vertices. With no descent step
+/// phi = Id, and for concentric circles of radii r1 < r2 every vertex of M2 lies r2 - r1 from
+/// M1 (up to M1's chords): far when that exceeds sigma, capped at TARGET_RESIDUAL_BAND_CELLS
+/// cells, and the same as the residual |d2(v)| over M1.
+TEST(Match, TargetResidualIsTheDistanceOfM2ToTheDeformedSource)
+{
+    const int level = 6;
+    const Real h = std::ldexp(Real(1), -level), sigma = 2 * h;
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = opts.multiscale.maxLevel = level;
+    opts.multiscale.descent.maxIterations = 0;
+    opts.autoLandmarks = opts.autoAnchors = false;
+    opts.threaded = false;
+    const Surface<2> inner = ellipseCurve(Vec<2>(0.0, 0.0), 1.0, 1.0, 400);
+    // The outer circle fixes the placement (radius 2 on every run), so the inner ones keep
+    // their unit-box radius.
+    const Surface<2> outer = ellipseCurve(Vec<2>(0.0, 0.0), 2.0, 2.0, 400);
+    const UnitBoxPlacement placement = placeInUnitBox(inner, outer, opts.margin);
+    for (const Real gapCells : {0.5, 1.5, 3.0, 6.0, 12.0}) {
+        // M1 a circle gapCells cells inside M2 (the outer circle).
+        const Real r1 = 2.0 - gapCells * h / placement.scale;
+        const Surface<2> source = ellipseCurve(Vec<2>(0.0, 0.0), r1, r1, 400);
+        const MatchResult<2> r = match<2>(source, outer, placement, opts);
+        ASSERT_TRUE(r.isComplete());
+        EXPECT_EQ(r.levels.back().report.iterations, 0);
+        const Real gap = gapCells * h;
+        const Real expected = std::min<Real>(gap, TARGET_RESIDUAL_BAND_CELLS * h);
+        const MatchResidual& t = r.targetResidual;
+        EXPECT_EQ(t.samples, outer.points.size());
+        // M1's chords sag by r1 (1 - cos(pi/400)) = 3e-5 r1 inside its circle.
+        EXPECT_NEAR(t.meanUnit, expected, 0.02 * h) << gapCells;
+        EXPECT_NEAR(t.maxUnit, expected, 0.02 * h) << gapCells;
+        EXPECT_EQ(t.farShare, gap > sigma ? 1.0 : 0.0) << gapCells;
+        EXPECT_NEAR(t.meanWorld, placement.toWorldLength(t.meanUnit), 1e-12);
+        // phi = Id: the same gap seen from M1.
+        if (gapCells < TARGET_RESIDUAL_BAND_CELLS) {
+            EXPECT_NEAR(r.residual.meanUnit, t.meanUnit, 0.02 * h) << gapCells;
+            EXPECT_EQ(r.residual.farShare, t.farShare) << gapCells;
+        }
+    }
+
+    // Off centre, with fewer vertices on M1: the distances of M2's 400 vertices to M1's
+    // polyline, 1.5 to 4.5 cells, computed here segment by segment.
+    const Real cell = h / placement.scale; // world units
+    const Surface<2> offCentre =
+        ellipseCurve(Vec<2>(1.5 * cell, 0.0), 2.0 - 3 * cell, 2.0 - 3 * cell, 300);
+    const MatchResult<2> r = match<2>(offCentre, outer, placement, opts);
+    ASSERT_TRUE(r.isComplete());
+    Real sum = 0, max = 0;
+    std::size_t far = 0;
+    for (const Vec<2>& y : outer.points) {
+        Real d = INF;
+        for (const auto& e : offCentre.elements) {
+            const Vec<2> a = offCentre.points[std::size_t(e[0])];
+            const Vec<2> b = offCentre.points[std::size_t(e[1])];
+            const Real t = std::clamp<Real>((y - a).dot(b - a) / (b - a).squaredNorm(), 0, 1);
+            d = std::min(d, (a + t * (b - a) - y).norm());
+        }
+        d *= placement.scale;
+        sum += d;
+        max = std::max(max, d);
+        if (d > sigma) ++far;
+    }
+    const MatchResidual& t = r.targetResidual;
+    EXPECT_EQ(t.samples, outer.points.size());
+    EXPECT_NEAR(t.meanUnit, sum / Real(outer.points.size()), 0.01 * h);
+    EXPECT_NEAR(t.maxUnit, max, 0.01 * h);
+    EXPECT_NEAR(max, 4.5 * h, 0.05 * h);
+    // Vertices within 0.01 cell of sigma could fall either way.
+    EXPECT_NEAR(t.farShare, Real(far) / Real(outer.points.size()), 0.01);
+    EXPECT_GT(t.farShare, 0.3);
+    EXPECT_LT(t.farShare, 0.9);
+    // ... which is not what M1's residual measures: 300 samples, another mean.
+    EXPECT_EQ(r.residual.samples, offCentre.points.size());
+}
+
+/// A circle and the same circle with a thin spike: phi(M1) lies on M2, but the spike, narrower
+/// than the coarse cells, stays unreached. The residual over M1 cannot see it; the target
+/// residual does, and MatchOptions::secondPathTarget runs another path for it.
+TEST(Match, SecondPathTargetRunsWhenPartOfM2IsNotReached)
+{
+    const Surface<2> circle = ellipseCurve(Vec<2>(0.0, 0.0), 1.0, 1.0, 300);
+    // M2: the circle from angle a to 2 pi - a (sin a = w), then a spike of half width w and
+    // length 0.6 along +x, its two long sides sampled every 0.005.
+    const Real w = 0.01, a = std::asin(w), length = 0.6;
+    Surface<2> spiked;
+    for (int i = 0; i <= 300; ++i) {
+        const Real t = a + (2 * M_PI - 2 * a) * Real(i) / 300;
+        spiked.points.push_back(Vec<2>(std::cos(t), std::sin(t)));
+    }
+    const Real x0 = std::cos(a);
+    const int steps = int(std::lround((1 + length - x0) / 0.005));
+    for (int k = 1; k <= steps; ++k)
+        spiked.points.push_back(Vec<2>(x0 + (1 + length - x0) * k / steps, -w));
+    for (int k = steps - 1; k >= 1; --k)
+        spiked.points.push_back(Vec<2>(x0 + (1 + length - x0) * k / steps, w));
+    for (std::size_t i = 0; i < spiked.points.size(); ++i)
+        spiked.elements.push_back({int32_t(i), int32_t((i + 1) % spiked.points.size())});
+
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 6;
+    opts.autoLandmarks = opts.autoAnchors = false;
+    opts.threaded = false;
+    EXPECT_FALSE(opts.secondPathTarget); // not a default
+    EXPECT_FALSE(MatchOptions::paper(2).secondPathTarget);
+    const UnitBoxPlacement placement = placeInUnitBox(circle, spiked, opts.margin);
+    const MatchResult<2> one = match<2>(circle, spiked, placement, opts);
+    ASSERT_TRUE(one.isComplete());
+    const SecondPathSummary& sp = one.secondPath;
+    std::printf("[ spike ] residual far %.2f%%, target residual far %.2f%%, mean %.3e, max "
+                "%.3e (unit box)\n",
+                100 * sp.farShare, 100 * sp.targetFarShare, one.targetResidual.meanUnit,
+                one.targetResidual.maxUnit);
+    EXPECT_LE(sp.farShare, DEFAULT_SECOND_PATH_SHARE);
+    EXPECT_GT(sp.targetFarShare, DEFAULT_SECOND_PATH_SHARE);
+    EXPECT_EQ(sp.targetFarShare, one.targetResidual.farShare);
+    EXPECT_FALSE(sp.target);
+    EXPECT_FALSE(sp.ran);
+    EXPECT_NE(sp.reason.find("reached M2"), std::string::npos) << sp.reason;
+
+    opts.secondPathTarget = true;
+    const MatchResult<2> more = match<2>(circle, spiked, placement, opts);
+    ASSERT_TRUE(more.isComplete());
+    const SecondPathSummary& sp2 = more.secondPath;
+    EXPECT_TRUE(sp2.target);
+    EXPECT_TRUE(sp2.ran) << sp2.reason;
+    ASSERT_GE(sp2.paths.size(), 2u);
+    // The first path is the run without the option, and the kept one the lowest.
+    EXPECT_EQ(sp2.paths[0].energy, one.levels.back().report.energy);
+    EXPECT_EQ(sp2.paths[0].targetFarShare, sp.targetFarShare);
+    Real lowest = INF;
+    for (const PathSummary& p : sp2.paths)
+        lowest = std::min<Real>(lowest, p.energy);
+    EXPECT_EQ(more.levels.back().report.energy, lowest);
+    EXPECT_EQ(sp2.paths[sp2.kept].targetFarShare, more.targetResidual.farShare);
+    for (std::size_t k = 0; k + 1 < sp2.paths.size(); ++k) {
+        const PathSummary& p = sp2.paths[k];
+        EXPECT_GT(std::max(p.farShare, p.targetFarShare), DEFAULT_SECOND_PATH_SHARE) << k;
+    }
 }
 
 TEST(Match, RejectsShapesOutsideTheBox)

@@ -8,6 +8,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <openvdb/Exceptions.h>
+#include <openvdb/tools/Interpolation.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -403,6 +404,52 @@ surfaceResidual(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
     return out;
 }
 
+/// dist(y, phi(M1)) over the points y of M2 (Omega units), MatchResult::targetResidual: the
+/// unsigned distance of the moved source surface on a band of TARGET_RESIDUAL_BAND_CELLS cells at
+/// @a level (distanceBand, exact at the nodes), interpolated at y and capped at the band's half
+/// width.
+template <int D>
+SurfaceResidual
+targetResidual(const Surface<D>& unitSource, const std::vector<Vec<D>>& moved,
+               const std::vector<Vec<D>>& targetPoints, int level, Real far, bool threaded)
+{
+    Surface<D> deformed;
+    deformed.points = moved;
+    deformed.elements = unitSource.elements;
+    const openvdb::FloatGrid::Ptr band =
+        distanceBand<D>(deformed, level, TARGET_RESIDUAL_BAND_CELLS, threaded);
+    const double cap = TARGET_RESIDUAL_BAND_CELLS * std::ldexp(1.0, -level);
+    const openvdb::FloatGrid::ConstAccessor acc = band->getConstAccessor();
+    const openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler>
+        sampler(acc, band->transform());
+    SurfaceResidual out;
+    for (const Vec<D>& y : targetPoints) {
+        openvdb::Vec3d p(0.0); // 2D: the band is the slice k = 0
+        for (int a = 0; a < D; ++a)
+            p[a] = y[a];
+        const double d = std::min(cap, std::abs(double(sampler.wsSample(p))));
+        out.sum += d;
+        out.max = std::max(out.max, d);
+        if (d > far) ++out.far;
+        ++out.samples;
+    }
+    return out;
+}
+
+/// MatchResidual of a SurfaceResidual, world and Omega units.
+MatchResidual
+toMatchResidual(const SurfaceResidual& r, const UnitBoxPlacement& placement)
+{
+    MatchResidual m;
+    m.samples = r.samples;
+    m.meanUnit = r.samples ? r.sum / double(r.samples) : 0.0;
+    m.maxUnit = r.max;
+    m.farShare = r.farShare();
+    m.meanWorld = placement.toWorldLength(m.meanUnit);
+    m.maxWorld = placement.toWorldLength(m.maxUnit);
+    return m;
+}
+
 } // namespace
 
 template <int D>
@@ -669,8 +716,9 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         multiscale::MultiscaleResult<D> run;
         std::vector<LevelSummary> levels;
         SurfaceResidual residual;
-        std::vector<Vec<D>> moved; ///< phi(v), Omega units
-        Real energy = INF;         ///< at the end of the finest level
+        SurfaceResidual targetResidual; ///< MatchResult::targetResidual
+        std::vector<Vec<D>> moved;      ///< phi(v), Omega units
+        Real energy = INF;              ///< at the end of the finest level
     };
     const Real finestSigma =
         opts.multiscale.energy.sigmaFactor * std::ldexp(Real(1), -opts.multiscale.maxLevel);
@@ -692,6 +740,9 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             path.residual =
                 surfaceResidual<D>(*path.run.lattice, path.run.displacement, unitSource.points,
                                    lastTarget.get(), finestSigma, path.moved);
+            path.targetResidual =
+                targetResidual<D>(unitSource, path.moved, unitTarget.points,
+                                  path.run.lattice->level(), finestSigma, opts.threaded);
         }
         if (path.run.isComplete()) path.energy = path.run.reports.back().energy;
         return path;
@@ -699,20 +750,28 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     Path kept = runPath(opts.multiscale);
 
     // MatchOptions::secondPath: the coarse levels left part of M1 behind.
+    // The share a path leaves behind: of M1, and of M2 with secondPathTarget.
+    auto leftBehind = [&](double ofSource, double ofTarget) {
+        return opts.secondPathTarget ? std::max(ofSource, ofTarget) : ofSource;
+    };
     SecondPathSummary& second = result.secondPath;
     second.requested = opts.secondPath;
     second.threshold = opts.secondPathShare;
     second.farShare = kept.residual.farShare();
+    second.targetFarShare = kept.targetResidual.farShare();
+    second.target = opts.secondPathTarget;
     if (opts.secondPath) {
         if (opts.multiscale.minLevel >= opts.multiscale.maxLevel) {
             second.reason = "one level: no coarse level to run differently";
         } else if (!kept.run.isComplete() || !(kept.energy < INF)) {
             second.reason = "the first path did not complete";
-        } else if (!(second.farShare > opts.secondPathShare)) {
+        } else if (!(leftBehind(second.farShare, second.targetFarShare) > opts.secondPathShare)) {
             std::ostringstream r;
             r << "the first path reached M2: " << 100 * second.farShare
-              << "% of M1 ended farther than sigma from it (threshold "
-              << 100 * opts.secondPathShare << "%)";
+              << "% of M1 ended farther than sigma from it";
+            if (opts.secondPathTarget)
+                r << ", " << 100 * second.targetFarShare << "% of M2 from phi(M1)";
+            r << " (threshold " << 100 * opts.secondPathShare << "%)";
             second.reason = r.str();
         } else {
             const Clock::time_point t0 = Clock::now();
@@ -722,6 +781,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                 p.coarseVolumeFactor = factor;
                 p.energy = path.energy;
                 p.farShare = path.residual.farShare();
+                p.targetFarShare = path.targetResidual.farShare();
                 return p;
             };
             second.paths.push_back(summary(kept, opts.multiscale.coarseVolumeFactor));
@@ -742,7 +802,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                     second.paths.back().levels = std::move(other.levels);
                 }
                 // Enough when this path reached M2, or was interrupted.
-                if (!complete || !(second.paths.back().farShare > opts.secondPathShare)) break;
+                const PathSummary& last = second.paths.back();
+                if (!complete ||
+                    !(leftBehind(last.farShare, last.targetFarShare) > opts.secondPathShare))
+                    break;
             }
             second.seconds = secondsSince(t0);
             second.done = true;
@@ -764,13 +827,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             result.landmarks.meanWorld = placement.toWorldLength(mean);
             result.landmarks.maxWorld = placement.toWorldLength(max);
         }
-        const SurfaceResidual& r = kept.residual;
-        result.residual.samples = r.samples;
-        result.residual.meanUnit = r.samples ? r.sum / double(r.samples) : 0.0;
-        result.residual.maxUnit = r.max;
-        result.residual.farShare = r.farShare();
-        result.residual.meanWorld = placement.toWorldLength(result.residual.meanUnit);
-        result.residual.maxWorld = placement.toWorldLength(result.residual.maxUnit);
+        result.residual = toMatchResidual(kept.residual, placement);
+        result.targetResidual = toMatchResidual(kept.targetResidual, placement);
         for (auto it = result.levels.rbegin(); it != result.levels.rend(); ++it) {
             if (it->report.iterations > 0 || it->report.energy < INF) {
                 result.minJacobian = it->report.minJacobian;

@@ -9,6 +9,9 @@ ground truth g written by make_pairs.py.
 Prints one table row. All lengths are in unit-box units (the match's placement:
 unit = scale * (world - worldOrigin), so a world length is multiplied by placement.scale):
   resid       result.residual.meanUnit of the forward report: mean |d2(phi(v))| over M1
+              (--tsv also: target_residual_mean and target_far_share, its mirror
+              result.targetResidual: M2's vertices to phi(M1); the status says "M2 not reached"
+              when more than 1% of them are farther than sigma)
   err mean/p95  mean and 95th percentile of |phi(v) - g(v)| over M1's vertices, phi(v) read
               from the forward deformed.obj (same vertex order as the source file)
   rev err     mean |psi(g(v)) - v| over M2's vertices (the reverse match against g^-1)
@@ -111,6 +114,12 @@ def main():
     # a sanity check of the order: phi should be much closer to g than to the identity
     if err.mean() > 0.9 * motion:
         status += ", err > 0.9 motion"
+    # the mirror of resid (vdb_match reports it since 2026-11-28): M2's vertices to phi(M1)
+    target = fwd["result"].get("targetResidual", {})
+    target_mean = target.get("meanUnit", float("nan"))
+    target_far = target.get("farShare", float("nan"))
+    if target_far > 0.01:
+        status += ", M2 not reached (%.1f%% far)" % (100 * target_far)
     print(row((pair["name"], "%dD" % dim, a.energy, a.levels, "%.1f" % a.wall,
                "%.1f" % a.reverse_wall, "%.2e" % resid, "%.2e" % err.mean(),
                "%.2e" % np.percentile(err, 95), "%.2e" % rev_err.mean(), "%.2e" % motion,
@@ -133,6 +142,7 @@ def main():
             "err_still_mean": float(err[still].mean()) if still.any() else float("nan"),
             "err_moving_mean": float(err[~still].mean()) if (~still).any() else float("nan"),
             "still_error_share": float(err[still].sum() / err.sum()) if err.sum() > 0 else 0.0,
+            "target_residual_mean": float(target_mean), "target_far_share": float(target_far),
         }
         new = not os.path.exists(a.tsv)
         with open(a.tsv, "a") as f:

@@ -95,6 +95,7 @@ def match(
     metric_tolerance: float | None = None,
     second_path: str | None = None,
     second_path_share: float | None = None,
+    second_path_target: str | None = None,
     strict: bool | None = None,
     threads: int | None = None,
 ) -> MatchResult: ...

@@ -347,6 +347,33 @@ if sp["kept"] < 2:
     kept = first if sp["kept"] == 0 else second
     assert both["result"]["residual"] == kept["result"]["residual"], (both["result"], kept["result"])
 PY
+# The target residual (dist(y, phi(M1)) over M2's vertices) and --second-path-target.
+check second-path-target-value 1 '' "--second-path-target expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-target maybe --quiet
+check target-residual-line 0 'target residual \(distance of M2.s vertices to phi\(M1\)\): mean .* max .*, 0\.0% of M2 farther than sigma' '' -- "${FIG[@]:0:2}" -o "$SCRATCH/tr" --levels 4..6 --quiet
+# No descent step: phi = Id leaves M2 where it is, and stderr says so (also with --quiet).
+check target-residual-warning 0 'target residual .* of M2 farther than sigma' 'warning: .*% of M2 is farther than sigma from phi\(M1\): the deformed source does not reach that part of the target .*--second-path-target on' -- "${FIG[@]:0:2}" -o "$SCRATCH/tr0" --levels 8..8 --max-iterations 0 --quiet
+check target-residual-target-on 0 'second path: .*% of M1 ended farther than sigma from M2 and .*% of M2 from phi\(M1\) on the first path; energies .*% of M2\).*: kept path' '' -- "${FIG[@]}" -o "$SCRATCH/spt" --second-path-target on
+count=$((count + 1))
+if "$PYTHON" - "$SCRATCH/tr" "$SCRATCH/tr0" "$SCRATCH/spt" "$SCRATCH/sp" "$SCRATCH/m3" <<'PY'; then echo "ok   target-residual-report"; else fail "target-residual-report"; fi
+import json, sys
+reached, identity, target_on, source_only, default3 = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+for r in (reached, identity, default3):
+    t = r["result"]["targetResidual"]
+    assert set(t) == {"meanWorld", "maxWorld", "meanUnit", "maxUnit", "samples", "farShare"}, t
+    assert t["samples"] == r["target"]["vertices"], (t, r["target"])
+    assert abs(t["meanWorld"] - t["meanUnit"] / r["placement"]["scale"]) <= 1e-9 * t["meanWorld"] + 1e-15
+    assert 0 <= t["meanUnit"] <= t["maxUnit"] <= 8 * 2.0 ** -r["levels"][-1]["level"] * (1 + 1e-9), t
+h = 2.0 ** -6
+assert reached["result"]["targetResidual"]["farShare"] == 0 and reached["result"]["targetResidual"]["meanUnit"] < h / 2
+far = identity["result"]["targetResidual"]
+assert far["farShare"] > 0.01 and far["maxUnit"] > 2 * 2.0 ** -8, far
+assert default3["parameters"]["secondPathTarget"] == "off" and target_on["parameters"]["secondPathTarget"] == "on"
+sp, sp0 = target_on["secondPath"], source_only["secondPath"]
+assert sp["ran"] and "targetFarShare" in sp and all("targetFarShare" in p for p in sp["paths"]), sp
+# M1 is left behind on this run, so the first path is the same with or without the option.
+assert sp["paths"][0]["energy"] == sp0["paths"][0]["energy"] and sp["targetFarShare"] == sp0["targetFarShare"]
+assert target_on["result"]["targetResidual"]["farShare"] == sp["paths"][sp["kept"]]["targetFarShare"]
+PY
 check trial-growth-range 3 '' 'grow must be finite and >= 1' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --trial-growth 0.5 --quiet
 check trial-growth 0 'converged|not converged' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/tg" --levels 3..4 --trial-growth 1.5 --quiet
 count=$((count + 1))

@@ -58,6 +58,7 @@ configKeys()
         {"autoAnchors", "--auto-anchors"},
         {"secondPath", "--second-path"},
         {"secondPathShare", "--second-path-share"},
+        {"secondPathTarget", "--second-path-target"},
         {"anchorWeight", "--anchor-weight"},
         {"anchorCount", "--anchor-count"},
         {"anchorRadius", "--anchor-radius"},
