@@ -288,8 +288,9 @@ TEST(Match, MembraneSaturationAtTheFirstTwoLevelsIsThe3DDefault)
 
 /// MatchResult::targetResidual is dist(y, phi(M1)) over M2's vertices. With no descent step
 /// phi = Id, and for concentric circles of radii r1 < r2 every vertex of M2 lies r2 - r1 from
-/// M1 (up to M1's chords): far when that exceeds sigma, capped at TARGET_RESIDUAL_BAND_CELLS
-/// cells, and the same as the residual |d2(v)| over M1.
+/// M1 (up to M1's chords): far when that exceeds sigma, exact beyond the band too, and the same
+/// as the residual |d2(v)| over M1; counted at the band's half width only when the exact search
+/// would exceed TARGET_RESIDUAL_EXACT_BUDGET.
 TEST(Match, TargetResidualIsTheDistanceOfM2ToTheDeformedSource)
 {
     const int level = 6;
@@ -311,20 +312,32 @@ TEST(Match, TargetResidualIsTheDistanceOfM2ToTheDeformedSource)
         const MatchResult<2> r = match<2>(source, outer, placement, opts);
         ASSERT_TRUE(r.isComplete());
         EXPECT_EQ(r.levels.back().report.iterations, 0);
-        const Real gap = gapCells * h;
-        const Real expected = std::min<Real>(gap, TARGET_RESIDUAL_BAND_CELLS * h);
+        const Real gap = gapCells * h, expected = gap;
         const MatchResidual& t = r.targetResidual;
         EXPECT_EQ(t.samples, outer.points.size());
+        EXPECT_EQ(t.capped, 0u);
         // M1's chords sag by r1 (1 - cos(pi/400)) = 3e-5 r1 inside its circle.
         EXPECT_NEAR(t.meanUnit, expected, 0.02 * h) << gapCells;
         EXPECT_NEAR(t.maxUnit, expected, 0.02 * h) << gapCells;
         EXPECT_EQ(t.farShare, gap > sigma ? 1.0 : 0.0) << gapCells;
         EXPECT_NEAR(t.meanWorld, placement.toWorldLength(t.meanUnit), 1e-12);
         // phi = Id: the same gap seen from M1.
-        if (gapCells < TARGET_RESIDUAL_BAND_CELLS) {
-            EXPECT_NEAR(r.residual.meanUnit, t.meanUnit, 0.02 * h) << gapCells;
-            EXPECT_EQ(r.residual.farShare, t.farShare) << gapCells;
-        }
+        EXPECT_NEAR(r.residual.meanUnit, t.meanUnit, 0.02 * h) << gapCells;
+        EXPECT_EQ(r.residual.farShare, t.farShare) << gapCells;
+    }
+    {
+        // 20000 vertices each, 12 cells apart: 4e8 point-segment distances, over the budget.
+        const Real r1 = 2.0 - 12 * h / placement.scale;
+        const Surface<2> dense1 = ellipseCurve(Vec<2>(0.0, 0.0), r1, r1, 20000);
+        const Surface<2> dense2 = ellipseCurve(Vec<2>(0.0, 0.0), 2.0, 2.0, 20000);
+        ASSERT_GT(20000.0 * 20000.0, TARGET_RESIDUAL_EXACT_BUDGET);
+        const MatchResult<2> r = match<2>(dense1, dense2, placement, opts);
+        const MatchResidual& t = r.targetResidual;
+        EXPECT_EQ(t.capped, 20000u);
+        EXPECT_NEAR(t.meanUnit, TARGET_RESIDUAL_BAND_CELLS * h, 1e-9);
+        EXPECT_NEAR(t.maxUnit, TARGET_RESIDUAL_BAND_CELLS * h, 1e-9);
+        EXPECT_EQ(t.farShare, 1.0);
+        EXPECT_EQ(r.residual.capped, 0u);
     }
 
     // Off centre, with fewer vertices on M1: the distances of M2's 400 vertices to M1's

@@ -3,6 +3,7 @@
 
 #include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/ExtremityMatching.h>
+#include <vdbmatch/geometry/TriangleDistance.h>
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
 
@@ -377,6 +378,7 @@ struct SurfaceResidual
 {
     double sum = 0, max = 0;
     std::size_t samples = 0, far = 0;
+    std::size_t capped = 0; ///< samples counted at a band's half width (targetResidual)
     double farShare() const { return samples ? double(far) / double(samples) : 0.0; }
 };
 
@@ -404,10 +406,39 @@ surfaceResidual(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
     return out;
 }
 
+/// Exact distance from @a y to the elements of @a s (all of them: for the few points beyond the
+/// band of targetResidual).
+template <int D>
+double
+elementDistance(const Surface<D>& s, const Vec<D>& y)
+{
+    double best = std::numeric_limits<double>::infinity();
+    for (const auto& e : s.elements) {
+        if constexpr (D == 3) {
+            auto v = [&](int k) {
+                const Vec<3>& q = s.points[std::size_t(e[std::size_t(k)])];
+                return openvdb::Vec3d(q[0], q[1], q[2]);
+            };
+            best = std::min(best, detail::triangleDistanceSqr(openvdb::Vec3d(y[0], y[1], y[2]),
+                                                              v(0), v(1), v(2)));
+        } else {
+            const Vec<2>& a = s.points[std::size_t(e[0])];
+            const Vec<2>& b = s.points[std::size_t(e[1])];
+            const double len2 = (b - a).squaredNorm();
+            const double t = len2 > 0 ? std::clamp((y - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
+            best = std::min(best, (a + t * (b - a) - y).squaredNorm());
+        }
+    }
+    return std::sqrt(best);
+}
+
 /// dist(y, phi(M1)) over the points y of M2 (Omega units), MatchResult::targetResidual: the
 /// unsigned distance of the moved source surface on a band of TARGET_RESIDUAL_BAND_CELLS cells at
-/// @a level (distanceBand, exact at the nodes), interpolated at y and capped at the band's half
-/// width.
+/// @a level (distanceBand, exact at the nodes), interpolated at y. Points within a cell of the
+/// band's edge or beyond get the exact distance to every element instead, unless that would
+/// take more than TARGET_RESIDUAL_EXACT_BUDGET point-element distances: then they count at the
+/// band's half width (SurfaceResidual::capped). Each point is independent and the sums run in
+/// order, so the result does not depend on the thread count.
 template <int D>
 SurfaceResidual
 targetResidual(const Surface<D>& unitSource, const std::vector<Vec<D>>& moved,
@@ -418,19 +449,31 @@ targetResidual(const Surface<D>& unitSource, const std::vector<Vec<D>>& moved,
     deformed.elements = unitSource.elements;
     const openvdb::FloatGrid::Ptr band =
         distanceBand<D>(deformed, level, TARGET_RESIDUAL_BAND_CELLS, threaded);
-    const double cap = TARGET_RESIDUAL_BAND_CELLS * std::ldexp(1.0, -level);
+    const double h = std::ldexp(1.0, -level), cap = TARGET_RESIDUAL_BAND_CELLS * h;
     const openvdb::FloatGrid::ConstAccessor acc = band->getConstAccessor();
     const openvdb::tools::GridSampler<openvdb::FloatGrid::ConstAccessor, openvdb::tools::BoxSampler>
         sampler(acc, band->transform());
-    SurfaceResidual out;
-    for (const Vec<D>& y : targetPoints) {
+    std::vector<double> d(targetPoints.size());
+    std::vector<std::size_t> beyond; // within a cell of the band's edge, or outside it
+    for (std::size_t i = 0; i < targetPoints.size(); ++i) {
         openvdb::Vec3d p(0.0); // 2D: the band is the slice k = 0
         for (int a = 0; a < D; ++a)
-            p[a] = y[a];
-        const double d = std::min(cap, std::abs(double(sampler.wsSample(p))));
-        out.sum += d;
-        out.max = std::max(out.max, d);
-        if (d > far) ++out.far;
+            p[a] = targetPoints[i][a];
+        d[i] = std::min(cap, std::abs(double(sampler.wsSample(p))));
+        if (d[i] > cap - h) beyond.push_back(i);
+    }
+    SurfaceResidual out;
+    if (double(beyond.size()) * double(deformed.elements.size()) <= TARGET_RESIDUAL_EXACT_BUDGET) {
+        detail::forEachIndex(beyond.size(), threaded, [&](std::size_t k) {
+            d[beyond[k]] = elementDistance<D>(deformed, targetPoints[beyond[k]]);
+        });
+    } else {
+        out.capped = beyond.size();
+    }
+    for (const double di : d) {
+        out.sum += di;
+        out.max = std::max(out.max, di);
+        if (di > far) ++out.far;
         ++out.samples;
     }
     return out;
@@ -445,6 +488,7 @@ toMatchResidual(const SurfaceResidual& r, const UnitBoxPlacement& placement)
     m.meanUnit = r.samples ? r.sum / double(r.samples) : 0.0;
     m.maxUnit = r.max;
     m.farShare = r.farShare();
+    m.capped = r.capped;
     m.meanWorld = placement.toWorldLength(m.meanUnit);
     m.maxWorld = placement.toWorldLength(m.maxUnit);
     return m;

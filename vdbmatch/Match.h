@@ -333,12 +333,19 @@ struct MatchResidual
     std::size_t samples = 0;
     /// Share of the samples farther than sigma of the finest level (> 2 h).
     double farShare = 0;
+    /// targetResidual: samples counted at TARGET_RESIDUAL_BAND_CELLS cells, farther in truth
+    /// (meanUnit and maxUnit are then lower bounds); 0 for residual.
+    std::size_t capped = 0;
 };
 
 /// MatchResult::targetResidual is measured on a narrow band of phi(M1)'s distance of this half
-/// width, in cells of the finest level: a vertex of M2 farther away counts at this distance (the
-/// mean and max are then lower bounds; farShare is exact, sigma being 2 cells).
+/// width, in cells of the finest level; the vertices of M2 near its edge or beyond get their
+/// exact distance to every element of phi(M1), ...
 constexpr double TARGET_RESIDUAL_BAND_CELLS = 8;
+/// ... unless that takes more than this many point-element distances (about a second): then
+/// they count at the band's half width (MatchResidual::capped; farShare stays exact, sigma being
+/// 2 cells).
+constexpr double TARGET_RESIDUAL_EXACT_BUDGET = 2e8;
 
 /// One path through the levels (MatchOptions::secondPath).
 struct PathSummary

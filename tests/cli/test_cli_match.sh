@@ -359,10 +359,11 @@ import json, sys
 reached, identity, target_on, source_only, default3 = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
 for r in (reached, identity, default3):
     t = r["result"]["targetResidual"]
-    assert set(t) == {"meanWorld", "maxWorld", "meanUnit", "maxUnit", "samples", "farShare"}, t
+    assert set(t) == {"meanWorld", "maxWorld", "meanUnit", "maxUnit", "samples", "farShare", "capped"}, t
+    assert t["capped"] == 0 and r["result"]["residual"]["capped"] == 0, r["result"]
     assert t["samples"] == r["target"]["vertices"], (t, r["target"])
     assert abs(t["meanWorld"] - t["meanUnit"] / r["placement"]["scale"]) <= 1e-9 * t["meanWorld"] + 1e-15
-    assert 0 <= t["meanUnit"] <= t["maxUnit"] <= 8 * 2.0 ** -r["levels"][-1]["level"] * (1 + 1e-9), t
+    assert 0 <= t["meanUnit"] <= t["maxUnit"], t
 h = 2.0 ** -6
 assert reached["result"]["targetResidual"]["farShare"] == 0 and reached["result"]["targetResidual"]["meanUnit"] < h / 2
 far = identity["result"]["targetResidual"]

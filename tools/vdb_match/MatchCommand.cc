@@ -143,20 +143,22 @@ Json
 residualJson(const MatchResidual& r)
 {
     return Json{{"meanWorld", r.meanWorld}, {"maxWorld", r.maxWorld}, {"meanUnit", r.meanUnit},
-                {"maxUnit", r.maxUnit},     {"samples", r.samples},   {"farShare", r.farShare}};
+                {"maxUnit", r.maxUnit},     {"samples", r.samples},   {"farShare", r.farShare},
+                {"capped", r.capped}};
 }
 
 /// The line on the target residual (MatchResult::targetResidual) after the summary.
 std::string
-targetResidualLine(const MatchResidual& r, double h)
+targetResidualLine(const MatchResidual& r)
 {
     std::string line = "target residual (distance of M2's vertices to phi(M1)): mean " +
                        fixed("%.3e", r.meanWorld) + " max " + fixed("%.3e", r.maxWorld) +
                        " (world units; " + fixed("%.2e", r.meanUnit) + " of the unit box), " +
                        fixed("%.1f", 100 * r.farShare) + "% of M2 farther than sigma";
-    if (r.maxUnit >= TARGET_RESIDUAL_BAND_CELLS * h * (1 - 1e-9)) {
-        line += " (distances beyond " + formatNumber(TARGET_RESIDUAL_BAND_CELLS) +
-                " cells counted as " + formatNumber(TARGET_RESIDUAL_BAND_CELLS) + ")";
+    if (r.capped) {
+        line += " (" + std::to_string(r.capped) + " vertices beyond " +
+                formatNumber(TARGET_RESIDUAL_BAND_CELLS) + " cells counted at " +
+                formatNumber(TARGET_RESIDUAL_BAND_CELLS) + ": mean and max are lower bounds)";
     }
     return line;
 }
@@ -1429,8 +1431,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
         << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
         << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n";
-    const double finestH = std::ldexp(1.0, -result.lattice->level());
-    out << "vdb_match: " << targetResidualLine(result.targetResidual, finestH) << "\n";
+    out << "vdb_match: " << targetResidualLine(result.targetResidual) << "\n";
     if (result.targetResidual.farShare > TARGET_RESIDUAL_WARNING_SHARE) {
         // On stderr, also with --quiet: it is about the result, not progress.
         err << "vdb_match: warning: " << fixed("%.1f", 100 * result.targetResidual.farShare)
