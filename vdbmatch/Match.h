@@ -341,7 +341,7 @@ struct MatchResidual
 /// MatchResult::targetResidual is measured on a narrow band of phi(M1)'s distance of this half
 /// width, in cells of the finest level; the vertices of M2 near its edge or beyond get their
 /// exact distance to every element of phi(M1), ...
-constexpr double TARGET_RESIDUAL_BAND_CELLS = 8;
+constexpr double TARGET_RESIDUAL_BAND_CELLS = 4;
 /// ... unless that takes more than this many point-element distances (about a second): then
 /// they count at the band's half width (MatchResidual::capped; farShare stays exact, sigma being
 /// 2 cells).
