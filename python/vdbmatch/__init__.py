@@ -395,12 +395,14 @@ class MatchResult:
     def __repr__(self) -> str:
         r = self.report
         res = r.get("result", {})
-        return (f"<vdbmatch.MatchResult {r.get('status', '?')}, energy {res.get('energy', float('nan')):.6g}, "
-                f"residual mean {res.get('residual', {}).get('meanUnit', float('nan')):.3g} of the unit box>")
+        nan = float("nan")
+        return (f"<vdbmatch.MatchResult {r.get('status', '?')}, energy {res.get('energy', nan):.6g}, "
+                f"residual mean {res.get('residual', {}).get('meanUnit', nan):.3g}, target residual "
+                f"mean {res.get('targetResidual', {}).get('meanUnit', nan):.3g} of the unit box>")
 
     @property
     def report(self) -> dict:
-        """report.json as a dict: parameters, per-level figures, residual, files."""
+        """report.json as a dict: parameters, per-level figures, residuals, files."""
         if self._report is None:
             with open(os.path.join(self.folder, "report.json")) as f:
                 self._report = json.load(f)

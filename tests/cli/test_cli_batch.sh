@@ -65,6 +65,10 @@ ok = names == ["a", "b", "c"] and all(m[x][x] == 0 for x in names)
 ok = ok and all(m[x][y] == m[y][x] > 0 for x in names for y in names if x != y)
 ok = ok and abs(m["a"]["b"] - e["a--b"] ** 0.5) <= 1e-6 * m["a"]["b"] and s["done"] == 3
 ok = ok and s["pictures"]["clusterOrder"] and sorted(s["pictures"]["clusterOrder"]) == names
+# each job's residuals, both ways, as its report has them
+for r in s["results"]:
+    rep = json.load(open(d + "/jobs/" + r["name"] + "/report.json"))["result"]
+    ok = ok and r["residual"] == rep["residual"] and r["targetResidual"] == rep["targetResidual"]
 print("ok" if ok else f"bad matrix or summary: {m} {e}")
 PY
 )

@@ -85,6 +85,10 @@ def test_match_from_numpy_equals_cli_bit_for_bit(tmp_path):
     assert [lv["iterations"] for lv in r.report["levels"]] == [lv["iterations"] for lv in cli.report["levels"]]
     assert voxels(r.displacement) == voxels(cli.displacement)
     assert voxels(r.inverse_displacement) == voxels(cli.inverse_displacement)
+    # the residuals both ways, and the target residual in the summary line of repr()
+    assert r.report["result"]["targetResidual"] == cli.report["result"]["targetResidual"]
+    assert r.report["result"]["targetResidual"]["samples"] == len(curves_b[0])
+    assert "target residual mean" in repr(r)
 
 
 def test_match_from_pyopenvdb_grid_equals_cli(tmp_path):

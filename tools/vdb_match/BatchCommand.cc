@@ -936,7 +936,8 @@ collectSequence(const std::string& outDir, const Plan& p, std::ostream& err, boo
 
 /// `batch collect`: distances.csv (sqrt of the final energy of each match; the mean of both
 /// directions where both ran), distances.png and mds.png for all pairs and summary.json (per job:
-/// energy and terms, residual, min det, time, memory, |psi o phi - Id| where both directions ran).
+/// energy and terms, residual and target residual, min det, time, memory, |psi o phi - Id| where
+/// both directions ran).
 int
 collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, bool quiet)
 {
@@ -1008,6 +1009,8 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
             e["energy"] = res.at("energy");
             if (res.contains("terms")) e["terms"] = res.at("terms");
             e["residual"] = res.at("residual");
+            // Reports written before the target residual (2026-11-28) have none.
+            if (res.contains("targetResidual")) e["targetResidual"] = res.at("targetResidual");
             e["minJacobian"] = res.at("minJacobian");
             // |psi o phi - Id| where the reverse job ran too (the consistency command).
             const std::string reverse = stemOf(j.target) + "--" + stemOf(j.source);
