@@ -505,6 +505,23 @@ TEST(Match, ThreadCountIndependence3D)
     EXPECT_EQ(results[0].levels.back().report.convergedBy, solver::ConvergenceTest::SurfaceSettled);
     ASSERT_EQ(results[0].displacement.cols(), results[1].displacement.cols());
     EXPECT_TRUE((results[0].displacement.array() == results[1].displacement.array()).all());
+    EXPECT_EQ(results[0].targetResidual.meanUnit, results[1].targetResidual.meanUnit);
+    EXPECT_EQ(results[0].targetResidual.maxUnit, results[1].targetResidual.maxUnit);
+
+    // The target residual's exact search beyond its band, in parallel: phi = Id leaves the
+    // ellipsoid cells away from the sphere.
+    opts.multiscale.minLevel = opts.multiscale.maxLevel = 6;
+    opts.multiscale.descent.maxIterations = 0;
+    for (int k = 0; k < 2; ++k) {
+        opts.threaded = k == 1;
+        results[k] = match<3>(sphere, ellipsoid, placement, opts);
+    }
+    const MatchResidual &t0 = results[0].targetResidual, &t1 = results[1].targetResidual;
+    EXPECT_GT(t0.maxUnit, TARGET_RESIDUAL_BAND_CELLS * std::ldexp(1.0, -6));
+    EXPECT_EQ(t0.capped, 0u);
+    EXPECT_EQ(t0.meanUnit, t1.meanUnit);
+    EXPECT_EQ(t0.maxUnit, t1.maxUnit);
+    EXPECT_EQ(t0.farShare, t1.farShare);
 }
 
 TEST(Match, AutomaticLandmarksFollowAStarTurnedFar)
