@@ -378,7 +378,8 @@ struct SurfaceResidual
 {
     double sum = 0, max = 0;
     std::size_t samples = 0, far = 0;
-    std::size_t capped = 0; ///< samples counted at a band's half width (targetResidual)
+    std::size_t capped = 0;    ///< samples counted at a band's half width (targetResidual)
+    std::size_t maxVertex = 0; ///< the vertex of the largest (the first of equals)
     double farShare() const { return samples ? double(far) / double(samples) : 0.0; }
 };
 
@@ -398,7 +399,10 @@ surfaceResidual(const SimplexLattice<D>& lattice, const NodeVectors<D>& u,
         Real d;
         if (target && target->sampleDistance(moved[i], d)) {
             out.sum += std::abs(d);
-            out.max = std::max<double>(out.max, std::abs(d));
+            if (std::abs(d) > out.max) {
+                out.max = std::abs(d);
+                out.maxVertex = i;
+            }
             if (std::abs(d) > far) ++out.far;
             ++out.samples;
         }
@@ -470,10 +474,13 @@ targetResidual(const Surface<D>& unitSource, const std::vector<Vec<D>>& moved,
     } else {
         out.capped = beyond.size();
     }
-    for (const double di : d) {
-        out.sum += di;
-        out.max = std::max(out.max, di);
-        if (di > far) ++out.far;
+    for (std::size_t i = 0; i < d.size(); ++i) {
+        out.sum += d[i];
+        if (d[i] > out.max) {
+            out.max = d[i];
+            out.maxVertex = i;
+        }
+        if (d[i] > far) ++out.far;
         ++out.samples;
     }
     return out;
@@ -489,6 +496,7 @@ toMatchResidual(const SurfaceResidual& r, const UnitBoxPlacement& placement)
     m.maxUnit = r.max;
     m.farShare = r.farShare();
     m.capped = r.capped;
+    m.maxVertex = r.maxVertex;
     m.meanWorld = placement.toWorldLength(m.meanUnit);
     m.maxWorld = placement.toWorldLength(m.maxUnit);
     return m;

@@ -336,6 +336,8 @@ struct MatchResidual
     /// targetResidual: samples counted at TARGET_RESIDUAL_BAND_CELLS cells, farther in truth
     /// (meanUnit and maxUnit are then lower bounds); 0 for residual.
     std::size_t capped = 0;
+    /// The vertex (of M1 for residual, of M2 for targetResidual, in input order) at maxUnit.
+    std::size_t maxVertex = 0;
 };
 
 /// MatchResult::targetResidual is measured on a narrow band of phi(M1)'s distance of this half

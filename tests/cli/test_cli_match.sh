@@ -359,7 +359,8 @@ import json, sys
 reached, identity, target_on, source_only, default3 = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
 for r in (reached, identity, default3):
     t = r["result"]["targetResidual"]
-    assert set(t) == {"meanWorld", "maxWorld", "meanUnit", "maxUnit", "samples", "farShare", "capped"}, t
+    assert set(t) == {"meanWorld", "maxWorld", "meanUnit", "maxUnit", "samples", "farShare", "capped", "maxVertex", "maxAtWorld"}, t
+    assert len(t["maxAtWorld"]) == r["dimension"] and 0 <= t["maxVertex"] < t["samples"], t
     assert t["capped"] == 0 and r["result"]["residual"]["capped"] == 0, r["result"]
     assert t["samples"] == r["target"]["vertices"], (t, r["target"])
     assert abs(t["meanWorld"] - t["meanUnit"] / r["placement"]["scale"]) <= 1e-9 * t["meanWorld"] + 1e-15

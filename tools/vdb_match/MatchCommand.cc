@@ -138,22 +138,50 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                       fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
 }
 
-/// report.json's result.residual and result.targetResidual.
+/// Where a residual is largest: the world position of its vertex in @a shape (the input's
+/// points: the mesh, polyline or the zero level set's mesh), 2 or 3 coordinates.
 Json
-residualJson(const MatchResidual& r)
+vertexWorld(const Shape& shape, std::size_t v)
 {
-    return Json{{"meanWorld", r.meanWorld}, {"maxWorld", r.maxWorld}, {"meanUnit", r.meanUnit},
-                {"maxUnit", r.maxUnit},     {"samples", r.samples},   {"farShare", r.farShare},
-                {"capped", r.capped}};
+    Json p = Json::array();
+    if (shape.dim == 2) {
+        if (v < shape.curve.points.size())
+            for (int a = 0; a < 2; ++a)
+                p.push_back(shape.curve.points[v][a]);
+    } else if (v < shape.surface.points.size()) {
+        for (int a = 0; a < 3; ++a)
+            p.push_back(shape.surface.points[v][a]);
+    }
+    return p;
 }
 
-/// The line on the target residual (MatchResult::targetResidual) after the summary.
-std::string
-targetResidualLine(const MatchResidual& r)
+/// report.json's result.residual (over @a shape = M1) and result.targetResidual (M2).
+Json
+residualJson(const MatchResidual& r, const Shape& shape)
 {
+    return Json{{"meanWorld", r.meanWorld},
+                {"maxWorld", r.maxWorld},
+                {"meanUnit", r.meanUnit},
+                {"maxUnit", r.maxUnit},
+                {"samples", r.samples},
+                {"farShare", r.farShare},
+                {"capped", r.capped},
+                {"maxVertex", r.maxVertex},
+                {"maxAtWorld", vertexWorld(shape, r.maxVertex)}};
+}
+
+/// The line on the target residual (MatchResult::targetResidual over @a target, M2) after the
+/// summary.
+std::string
+targetResidualLine(const MatchResidual& r, const Shape& target)
+{
+    std::string at;
+    for (const Json& x : vertexWorld(target, r.maxVertex))
+        at += (at.empty() ? "(" : ", ") + fixed("%.4g", x.get<double>());
     std::string line = "target residual (distance of M2's vertices to phi(M1)): mean " +
                        fixed("%.3e", r.meanWorld) + " max " + fixed("%.3e", r.maxWorld) +
-                       " (world units; " + fixed("%.2e", r.meanUnit) + " of the unit box), " +
+                       (at.empty() ? std::string() : " at " + at + ")") + " (world units; " +
+                       fixed("%.2e", r.meanUnit) + " of the unit box), " +
                        fixed("%.1f", 100 * r.farShare) + "% of M2 farther than sigma";
     if (r.capped) {
         line += " (" + std::to_string(r.capped) + " vertices beyond " +
@@ -1024,8 +1052,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["result"] = Json{{"energy", last ? last->energy : INF},
                        {"terms", termsJson(last ? last->terms : EnergyTerms())},
                        {"minJacobian", r.minJacobian},
-                       {"residual", residualJson(r.residual)},
-                       {"targetResidual", residualJson(r.targetResidual)},
+                       {"residual", residualJson(r.residual, in[0])},
+                       {"targetResidual", residualJson(r.targetResidual, in[1])},
                        {"seconds", Json{{"match", r.totalSeconds}, {"write", writeSeconds}}},
                        {"peakMemoryMB", peakMemoryMB()}};
     if (extra.inverse) {
@@ -1431,7 +1459,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
         << fixed("%.2e", result.residual.meanUnit) << " of the unit box, h/2 = "
         << fixed("%.2e", 0.5 * std::ldexp(1.0, -result.lattice->level())) << "), min det "
         << fixed("%.3g", result.minJacobian) << ", " << duration(secondsSince(start)) << "\n";
-    out << "vdb_match: " << targetResidualLine(result.targetResidual) << "\n";
+    out << "vdb_match: " << targetResidualLine(result.targetResidual, in[1]) << "\n";
     if (result.targetResidual.farShare > TARGET_RESIDUAL_WARNING_SHARE) {
         // On stderr, also with --quiet: it is about the result, not progress.
         err << "vdb_match: warning: " << fixed("%.1f", 100 * result.targetResidual.farShare)
