@@ -559,8 +559,9 @@ matchOptionTable()
              "; --preset paper: off)",
          [](O& o, const std::string& v) { o.secondPath = parseOnOff("--second-path", v); }},
         {"--second-path-share", "X", "Descent",
-         "the share of M1's vertices, in [0, 1], that must end farther than sigma from M2 for "
-         "--second-path to run another path (default " +
+         "the share of M1's vertices (with --second-path-target on: or of M2's from phi(M1)), "
+         "in [0, 1], that must end farther than sigma from M2 for --second-path to run another "
+         "path (default " +
              formatNumber(DEFAULT_SECOND_PATH_SHARE) + ")",
          [](O& o, const std::string& v) {
              o.secondPathShare = parseDouble("--second-path-share", v);
