@@ -801,8 +801,9 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     };
     Path kept = runPath(opts.multiscale);
 
-    // MatchOptions::secondPath: the coarse levels left part of M1 behind.
-    // The share a path leaves behind: of M1, and of M2 with secondPathTarget.
+    // MatchOptions::secondPath: the coarse levels left part of M1 behind (or, with
+    // secondPathTarget, of M2 unreached). The share a path leaves behind: of M1, and of M2 with
+    // secondPathTarget.
     auto leftBehind = [&](double ofSource, double ofTarget) {
         return opts.secondPathTarget ? std::max(ofSource, ofTarget) : ofSource;
     };
