@@ -801,6 +801,11 @@ TEST(Match, SecondPathKeepsTheLowestEnergyOfItsPaths)
         << alone.secondPath.reason;
     opts.secondPathShare = 1.5;
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.secondPathShare = 0.01;
+    opts.secondPath = false;
+    opts.secondPathTarget = true; // has nothing to act on
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.secondPathTarget = false;
     opts.secondPathShare = -0.1;
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
 }

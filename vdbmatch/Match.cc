@@ -178,6 +178,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: secondPathShare must be in [0, 1], got " << secondPathShare);
     }
+    if (secondPathTarget && !secondPath) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: secondPathTarget needs secondPath (--second-path-target on "
+                      "needs --second-path on; --preset paper turns it off)");
+    }
     if (autoLandmarkLevels < 1) {
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: autoLandmarkLevels must be >= 1, got " << autoLandmarkLevels);

@@ -349,6 +349,7 @@ if sp["kept"] < 2:
 PY
 # The target residual (dist(y, phi(M1)) over M2's vertices) and --second-path-target.
 check second-path-target-value 1 '' "--second-path-target expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-target maybe --quiet
+check second-path-target-alone 3 '' 'second-path-target on needs --second-path on' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --preset paper --second-path-target on --quiet
 check target-residual-line 0 'target residual \(distance of M2.s vertices to phi\(M1\)\): mean .* max .*, 0\.0% of M2 farther than sigma' '' -- "${FIG[@]:0:2}" -o "$SCRATCH/tr" --levels 4..6 --quiet
 # No descent step: phi = Id leaves M2 where it is, and stderr says so (also with --quiet).
 check target-residual-warning 0 'target residual .* of M2 farther than sigma' 'warning: .*% of M2 is farther than sigma from phi\(M1\): the deformed source does not reach that part of the target .*--second-path-target on' -- "${FIG[@]:0:2}" -o "$SCRATCH/tr0" --levels 8..8 --max-iterations 0 --quiet
