@@ -431,11 +431,8 @@ elementDistance(const Surface<D>& s, const Vec<D>& y)
             best = std::min(best, detail::triangleDistanceSqr(openvdb::Vec3d(y[0], y[1], y[2]),
                                                               v(0), v(1), v(2)));
         } else {
-            const Vec<2>& a = s.points[std::size_t(e[0])];
-            const Vec<2>& b = s.points[std::size_t(e[1])];
-            const double len2 = (b - a).squaredNorm();
-            const double t = len2 > 0 ? std::clamp((y - a).dot(b - a) / len2, 0.0, 1.0) : 0.0;
-            best = std::min(best, (a + t * (b - a) - y).squaredNorm());
+            best = std::min(best, detail::segmentDistanceSqr(y, s.points[std::size_t(e[0])],
+                                                             s.points[std::size_t(e[1])]));
         }
     }
     return std::sqrt(best);

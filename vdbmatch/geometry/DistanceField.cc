@@ -71,10 +71,7 @@ struct Segments2D
     size_t size() const { return a.size(); }
     double distanceSqr(size_t s, const Vec<2>& p) const
     {
-        const Vec<2> ab = b[s] - a[s], ap = p - a[s];
-        const double len2 = ab.squaredNorm();
-        const double t = len2 > 0.0 ? std::clamp(ap.dot(ab) / len2, 0.0, 1.0) : 0.0;
-        return (ap - t * ab).squaredNorm();
+        return detail::segmentDistanceSqr(p, a[s], b[s]);
     }
 };
 

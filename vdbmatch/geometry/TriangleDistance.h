@@ -1,6 +1,9 @@
 /// @file TriangleDistance.h
-/// @brief Exact squared distance from a point to a triangle (shared by the distance builders).
+/// @brief Exact squared distances from a point to a triangle and to a segment (shared by the
+///        distance builders and the target residual of match()).
 #pragma once
+
+#include <vdbmatch/Types.h>
 
 #include <openvdb/openvdb.h>
 
@@ -9,6 +12,16 @@
 
 namespace vdbmatch {
 namespace detail {
+
+/// Squared distance from p to the segment (a, b); a degenerate segment is the point a.
+inline double
+segmentDistanceSqr(const Vec<2>& p, const Vec<2>& a, const Vec<2>& b)
+{
+    const Vec<2> ab = b - a, ap = p - a;
+    const double len2 = ab.squaredNorm();
+    const double t = len2 > 0.0 ? std::clamp(ap.dot(ab) / len2, 0.0, 1.0) : 0.0;
+    return (ap - t * ab).squaredNorm();
+}
 
 /// Squared distance from p to the triangle (a, b, c), by the Voronoi regions of its corners and
 /// edges (Ericson, Real-Time Collision Detection, 5.1.5). Degenerate triangles fall back to
