@@ -116,6 +116,7 @@ MatchOptions::paper(int dim)
     opts.multiscale.metric.cgTolerance = DEFAULT_MATCH_METRIC_TOLERANCE;
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
     opts.anchorWeight = dim == 2 ? DEFAULT_ANCHOR_WEIGHT_2D : DEFAULT_ANCHOR_WEIGHT_3D;
+    opts.anchorOptions.count = dim == 2 ? DEFAULT_ANCHOR_COUNT_2D : DEFAULT_ANCHOR_COUNT_3D;
     return opts;
 }
 

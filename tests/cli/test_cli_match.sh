@@ -96,6 +96,8 @@ s = vdb.read(out + "/deformed.vdb", "surface")
 assert s.gridClass == vdb.GridClass.LEVEL_SET, s.gridClass
 r = json.load(open(out + "/report.json"))
 assert r["dimension"] == dim and r["status"] in ("converged", "not converged")
+# The automatic anchors' count is per dimension: 300 in 3D (100 in 2D, below).
+assert r["parameters"]["anchorCount"] == 300, r["parameters"]
 last = r["levels"][-1]
 assert r["result"]["residual"]["meanUnit"] < last["h"] / 2, (r["result"]["residual"], last["h"])
 assert r["result"]["minJacobian"] > 0
@@ -445,6 +447,7 @@ PY
     check anchor-radius-bad 3 '' 'the anchor tolerance and radius must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-radius -0.1 --quiet
     check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
+    check match-2d-anchor-count 0 'with [1-7] still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2c7" --levels 4..4 --anchor-count 7
     count=$((count + 1))
     if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" "$SCRATCH/m2n" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
 import json, sys
@@ -465,7 +468,7 @@ B = bare["autoLandmarks"]
 assert B["anchors"] == 0 and bare["parameters"]["autoAnchors"] == "off", B
 terms = [l["terms"]["landmarks"] for l in bare["levels"]]
 assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
-assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorCount"] == 100
+assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorCount"] == 100  # 2D
 assert 0 < A["anchors"] <= 100 and 0 < A["anchorCoincidentShare"] < 1, A
 terms = [l["terms"]["landmarks"] for l in auto["levels"]]
 assert all(t > 0 for t in terms), terms

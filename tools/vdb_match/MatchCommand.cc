@@ -106,14 +106,15 @@ struct MatchCliOptions
     std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
     std::optional<bool> secondPath;  ///< --second-path on|off (default per preset)
     double secondPathShare = DEFAULT_SECOND_PATH_SHARE;
-    bool secondPathTarget = false;      ///< --second-path-target on|off
-    std::optional<double> anchorWeight; ///< --anchor-weight (default per dimension)
-    StillAnchorOptions anchorOptions;
-    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
-    bool writeInverse = true;       ///< inverse.vdb
-    bool writeJacobian = true;      ///< jacobian.vdb
-    bool logJacobian = false;       ///< jacobian.vdb holds log det
-    bool half = false;              ///< half-float storage of the vector grids
+    bool secondPathTarget = false;          ///< --second-path-target on|off
+    std::optional<double> anchorWeight;     ///< --anchor-weight (default per dimension)
+    std::optional<std::size_t> anchorCount; ///< --anchor-count (default per dimension)
+    StillAnchorOptions anchorOptions;       ///< --anchor-radius, --anchor-tolerance
+    std::optional<double> isoValue;         ///< --iso-value: densities converted at this value
+    bool writeInverse = true;               ///< inverse.vdb
+    bool writeJacobian = true;              ///< jacobian.vdb
+    bool logJacobian = false;               ///< jacobian.vdb holds log det
+    bool half = false;                      ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;
@@ -452,11 +453,12 @@ matchOptionTable()
          [](O& o, const std::string& v) { o.anchorWeight = parseDouble("--anchor-weight", v); }},
         {"--anchor-count", "N", "Landmarks (an addition to the paper)",
          "most automatic anchors, farthest-point samples of where M1 and M2 coincide, >= 1 "
-         "(default " + std::to_string(d.anchorOptions.count) + ")",
+         "(default " + both(double(DEFAULT_ANCHOR_COUNT_3D), double(DEFAULT_ANCHOR_COUNT_2D)) +
+             ")",
          [](O& o, const std::string& v) {
              const int n = parseInt("--anchor-count", v);
              if (n < 1) throw UsageError("--anchor-count must be >= 1, got " + v);
-             o.anchorOptions.count = std::size_t(n);
+             o.anchorCount = std::size_t(n);
          }},
         {"--anchor-radius", "X", "Landmarks (an addition to the paper)",
          "M1 and M2 coincide around a vertex when every vertex of its shape within X of it is "
@@ -1152,7 +1154,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.secondPath) opts.secondPath = *o.secondPath;
     opts.secondPathShare = o.secondPathShare;
     opts.secondPathTarget = o.secondPathTarget;
+    const std::size_t anchorCount = opts.anchorOptions.count; // the dimension's default
     opts.anchorOptions = o.anchorOptions;
+    opts.anchorOptions.count = o.anchorCount.value_or(anchorCount);
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
         OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
