@@ -24,7 +24,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from score import read_points  # noqa: E402
+from score import read_points, read_run  # noqa: E402
 
 
 def fail(message):
@@ -56,11 +56,7 @@ def main(argv=None):
                                                                     pair["dimension"]))
             truth = read_points(os.path.join(pair_dir, "truth.xyz"), 2)
             target = read_points(os.path.join(pair_dir, "target_resampled.polyline"), 2)
-            if "=" not in spec:
-                fail("--run expects LABEL=FORWARD_DIR, got %r" % spec)
-            label, d = spec.split("=", 1)
-            report = json.load(open(os.path.join(d, "report.json")))
-            phi = read_points(os.path.join(d, "deformed.obj"), 2)
+            label, d, report, phi = read_run(spec, 2)
             if len(phi) != len(truth):
                 fail("%s: %d vertices, g has %d" % (d, len(phi), len(truth)))
             scale = report["placement"]["scale"]

@@ -35,7 +35,7 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from score import read_points  # noqa: E402
+from score import read_points, read_run  # noqa: E402
 
 MOVING = 5e-3  # |g(v) - v| above which a vertex is moving (box units), as score.py
 OFFSETS = [(1, 0), (0, 1), (1, 1), (1, -1), (2, 1), (1, 2), (2, -1), (1, -2)]
@@ -190,11 +190,7 @@ def main(argv=None):
             fail("truth.xyz has %d points, the source %d" % (len(truth), len(verts)))
         runs = []
         for spec in a.run:
-            if "=" not in spec:
-                fail("--run expects LABEL=FORWARD_DIR, got %r" % spec)
-            label, d = spec.split("=", 1)
-            report = json.load(open(os.path.join(d, "report.json")))
-            phi = read_points(os.path.join(d, "deformed.obj"), 2)
+            label, d, report, phi = read_run(spec, 2)
             if len(phi) != len(verts):
                 fail("%s: %d vertices, the source has %d" % (d, len(phi), len(verts)))
             pairs = (report.get("autoLandmarks") or {}).get("pairs") or []

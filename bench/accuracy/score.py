@@ -62,6 +62,17 @@ def read_points(path, dim):
     return np.array(pts, dtype=float)
 
 
+def read_run(spec, dim):
+    """A --run LABEL=FORWARD_DIR of the diagnosis scripts -> (label, FORWARD_DIR, its report.json,
+    the vertices of its deformed.obj). ValueError for a spec without '='."""
+    if "=" not in spec:
+        raise ValueError("--run expects LABEL=FORWARD_DIR, got %r" % spec)
+    label, d = spec.split("=", 1)
+    with open(os.path.join(d, "report.json")) as f:
+        report = json.load(f)
+    return label, d, report, read_points(os.path.join(d, "deformed.obj"), dim)
+
+
 def fail(message):
     sys.exit("score.py: " + message)
 
