@@ -65,17 +65,18 @@ namespace vdbmatch {
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 /// Default c_lm of the landmark term (energy/LandmarkTerm.h): docs/numerics.md "Landmarks".
 constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
-/// Default c_an, the total weight of the automatic anchors (MatchOptions::anchorWeight), in 2D
-/// and 3D: docs/numerics.md "Automatic anchors".
-constexpr double DEFAULT_ANCHOR_WEIGHT_2D = 1000;
-constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 10000;
 /// Default most automatic anchors (StillAnchorOptions::count, --anchor-count) in 2D and 3D:
 /// about the same spacing on a 3D surface as on a 2D outline (0.024-0.029 of the box on the
 /// benchmark's 3D shapes, about 0.027 on the 2D figure). 300 rather than 100 in 3D lowered the
-/// error on all five 3D pairs where anchors act (docs/numerics.md "Automatic anchors"); in 2D
-/// 300 is worse.
+/// error on all five 3D pairs where anchors act (docs/numerics.md "The count and the weight in
+/// 3D"); in 2D 300 is worse.
 constexpr std::size_t DEFAULT_ANCHOR_COUNT_2D = 100;
 constexpr std::size_t DEFAULT_ANCHOR_COUNT_3D = 300;
+/// Default c_an, the total weight of the automatic anchors (MatchOptions::anchorWeight), in 2D
+/// and 3D: each anchor weighs c_an / count, 10 in 2D and 100 in 3D (docs/numerics.md
+/// "Automatic anchors", "The count and the weight in 3D").
+constexpr double DEFAULT_ANCHOR_WEIGHT_2D = 1000;
+constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 30000;
 /// The automatic anchors act only when the motion is an articulation: some extremity stays (its
 /// pair lies within the anchor radius) and moves at most this fraction of the extremity that
 /// moves most. Extremities that all move alike (a twist of the body, a turn of the whole shape)
