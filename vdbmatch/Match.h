@@ -239,7 +239,9 @@ struct MatchOptions
     /// at every level: what the motion left in place stays, instead of sliding along its own
     /// surface toward the moving limb. On in defaults(), off in paper().
     bool autoAnchors = false;
-    StillAnchorOptions anchorOptions;               ///< tolerance, radius and count (Omega units)
+    /// Tolerance, radius and count (Omega units); paper(dim) and defaults(dim) set the count per
+    /// dimension (DEFAULT_ANCHOR_COUNT_2D/3D), as they set anchorWeight.
+    StillAnchorOptions anchorOptions;
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
     /// Second path, an addition to the paper (docs/numerics.md "Second path"): when more than
     /// secondPathShare of M1's vertices end farther than sigma of the finest level from M2 (a
