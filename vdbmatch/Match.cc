@@ -3,6 +3,7 @@
 
 #include <vdbmatch/Parallel.h>
 #include <vdbmatch/geometry/ExtremityMatching.h>
+#include <vdbmatch/geometry/InnerDistance.h>
 #include <vdbmatch/geometry/TriangleDistance.h>
 #include <vdbmatch/lattice/AdaptiveLattice.h>
 #include <vdbmatch/multiscale/Prolongation.h>
@@ -183,6 +184,18 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: secondPathTarget needs secondPath (--second-path-target on "
                       "needs --second-path on; --preset paper turns it off)");
+    }
+    if (!(innerDistanceWeight >= 0) || !std::isfinite(innerDistanceWeight) ||
+        !(innerDistanceTolerance >= 0) || !std::isfinite(innerDistanceTolerance)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: the inner-distance weight and tolerance must be finite and "
+                      ">= 0, got "
+                          << innerDistanceWeight << " and " << innerDistanceTolerance);
+    }
+    if (innerDistanceLevel > MAX_INNER_DISTANCE_LEVEL) {
+        OPENVDB_THROW(openvdb::ValueError, "MatchOptions: innerDistanceLevel must be at most "
+                                               << MAX_INNER_DISTANCE_LEVEL << ", got "
+                                               << innerDistanceLevel);
     }
     if (autoLandmarkLevels < 1) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -375,6 +388,112 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         }
         out.seconds = secondsSince(start);
     }
+    return out;
+}
+
+/// MatchOptions::innerDistanceWeight: F1_k, F2_k from each pair k of extremities (the automatic
+/// landmarks) and the vertices of M1 with their shares of its measure and nearest extremity;
+/// @a samples stays empty when the term does not act (the summary says why).
+template <int D>
+InnerDistanceSummary
+innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
+                     const UnitBoxPlacement& placement, const AutoLandmarkSummary& pairs,
+                     const MatchOptions& opts, InnerDistanceSamples<D>& samples)
+{
+    const Clock::time_point start = Clock::now();
+    InnerDistanceSummary out;
+    out.requested = true;
+    out.weight = opts.innerDistanceWeight;
+    out.tolerance = opts.innerDistanceTolerance;
+    out.level = opts.innerDistanceLevel > 0
+                    ? opts.innerDistanceLevel
+                    : (D == 3 ? DEFAULT_INNER_DISTANCE_LEVEL_3D : DEFAULT_INNER_DISTANCE_LEVEL_2D);
+    if (!pairs.used) {
+        out.reason = "the automatic landmarks do not act";
+        return out;
+    }
+    const auto unit = [&](const std::vector<openvdb::Vec3d>& world) {
+        std::vector<Vec<D>> points;
+        for (const openvdb::Vec3d& w : world) {
+            const openvdb::Vec3d u = placement.toUnit(w);
+            Vec<D> p;
+            for (int a = 0; a < D; ++a)
+                p[a] = u[a];
+            points.push_back(p);
+        }
+        return points;
+    };
+    const std::vector<Vec<D>> a = unit(pairs.source), b = unit(pairs.target);
+    std::vector<InnerDistanceField<D>> f1, f2;
+    auto buildSource = [&] {
+        f1 = innerDistanceFields<D>(unitSource, a, out.level, opts.threaded);
+    };
+    auto buildTarget = [&] {
+        f2 = innerDistanceFields<D>(unitTarget, b, out.level, opts.threaded);
+    };
+    detail::invokeBoth(opts.threaded, buildSource, buildTarget);
+    for (std::size_t k = 0; k < f1.size(); ++k) {
+        if (f1[k].empty() || f2[k].empty()) {
+            out.reason = "a shape has no lattice node inside at the level of F";
+            out.seconds = secondsSince(start);
+            return out;
+        }
+    }
+    for (InnerDistanceField<D>& f : f2)
+        samples.targets.push_back(std::make_shared<const InnerDistanceField<D>>(std::move(f)));
+    // Each vertex carries 1/D of the measure of its elements.
+    std::vector<Real> share(unitSource.points.size(), 0);
+    Real total = 0;
+    for (const auto& e : unitSource.elements) {
+        Real m;
+        if constexpr (D == 2) {
+            m = (unitSource.points[std::size_t(e[1])] - unitSource.points[std::size_t(e[0])])
+                    .norm();
+        } else {
+            const Vec<3> p = unitSource.points[std::size_t(e[0])];
+            m = 0.5 * (unitSource.points[std::size_t(e[1])] - p)
+                          .cross(unitSource.points[std::size_t(e[2])] - p)
+                          .norm();
+        }
+        for (int k = 0; k < D; ++k)
+            share[std::size_t(e[std::size_t(k)])] += m / D;
+        total += m;
+    }
+    // Each vertex keeps its inner distance to the extremity of M1 nearest to it (the first of
+    // equals).
+    for (std::size_t i = 0; i < unitSource.points.size(); ++i) {
+        if (!(share[i] > 0)) continue;
+        Real best = INF;
+        uint32_t nearest = 0;
+        for (std::size_t k = 0; k < f1.size(); ++k) {
+            Real f;
+            f1[k].sample(unitSource.points[i], f);
+            if (f < best) {
+                best = f;
+                nearest = uint32_t(k);
+            }
+        }
+        samples.points.push_back(unitSource.points[i]);
+        samples.values.push_back(best);
+        samples.fields.push_back(nearest);
+        samples.weights.push_back(Real(opts.innerDistanceWeight) * share[i] / total);
+    }
+    samples.tolerance = Real(opts.innerDistanceTolerance);
+    out.used = true;
+    out.points = samples.points.size();
+    // At phi = Id: how far F changes between the shapes at the same place.
+    Real sum = 0, beyond = 0;
+    for (std::size_t i = 0; i < samples.points.size(); ++i) {
+        Real f;
+        samples.targets[samples.fields[i]]->sample(samples.points[i], f);
+        const Real r = std::abs(f - samples.values[i]);
+        const Real w = samples.weights[i] / Real(opts.innerDistanceWeight);
+        sum += w * r;
+        if (r > samples.tolerance) beyond += w;
+    }
+    out.startMean = sum;
+    out.startBeyond = beyond;
+    out.seconds = secondsSince(start);
     return out;
 }
 
@@ -608,6 +727,12 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         }
     }
     const LandmarkPairs<D>& early = guided.source.empty() ? landmarks : guided;
+    // The inner-distance term (energy/InnerDistanceTerm.h), from the paired extremities.
+    InnerDistanceSamples<D> inner;
+    if (opts.innerDistanceWeight > 0) {
+        result.innerDistance = innerDistanceSamples(unitSource, unitTarget, placement,
+                                                    result.autoLandmarks, opts, inner);
+    }
     std::shared_ptr<const FieldSampler<D>> lastTarget;
     LevelSummary pending;
     // Distance tiers shared between levels (the coarse box and the band two levels down).
@@ -636,6 +761,9 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             } else if (!anchored.source.empty()) {
                 level.landmarks = &anchored;
             }
+            if (!inner.points.empty() && (opts.innerDistanceLevels == 0 ||
+                                          l < opts.multiscale.minLevel + opts.innerDistanceLevels))
+                level.innerDistance = &inner;
             summary.fieldSeconds = secondsSince(t0);
 
             t0 = Clock::now();
@@ -882,6 +1010,13 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             term.residual(result.displacement, mean, max);
             result.landmarks.meanWorld = placement.toWorldLength(mean);
             result.landmarks.maxWorld = placement.toWorldLength(max);
+        }
+        if (!inner.points.empty()) {
+            const energy::InnerDistanceTerm<D> term(*result.lattice, inner);
+            Real mean = 0, beyond = 0;
+            term.residual(result.displacement, mean, beyond);
+            result.innerDistance.mean = mean;
+            result.innerDistance.beyond = beyond;
         }
         result.residual = toMatchResidual(kept.residual, placement);
         result.targetResidual = toMatchResidual(kept.targetResidual, placement);

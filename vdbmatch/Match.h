@@ -65,6 +65,12 @@ namespace vdbmatch {
 constexpr double DEFAULT_MATCH_ENERGY_TOLERANCE = 1e-3;
 /// Default c_lm of the landmark term (energy/LandmarkTerm.h): docs/numerics.md "Landmarks".
 constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
+/// Defaults of the inner-distance term (MatchOptions::innerDistanceWeight): docs/numerics.md
+/// "The inner distance".
+constexpr double DEFAULT_INNER_DISTANCE_TOLERANCE = 0.01;
+constexpr int DEFAULT_INNER_DISTANCE_LEVEL_2D = 8;
+constexpr int DEFAULT_INNER_DISTANCE_LEVEL_3D = 7;
+constexpr int MAX_INNER_DISTANCE_LEVEL = 9; ///< (2^9 + 1)^3 nodes, 1 GB of doubles in 3D
 /// Default most automatic anchors (StillAnchorOptions::count, --anchor-count) in 2D and 3D:
 /// about the same spacing on a 3D surface as on a 2D outline (0.024-0.029 of the box on the
 /// benchmark's 3D shapes, about 0.027 on the 2D figure). 300 rather than 100 in 3D lowered the
@@ -243,6 +249,17 @@ struct MatchOptions
     /// dimension (DEFAULT_ANCHOR_COUNT_2D/3D), as they set anchorWeight.
     StillAnchorOptions anchorOptions;
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
+    /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):
+    /// when the automatic landmarks act, c_F times the mean over M1 of
+    /// max(|F2_k(phi(x)) - F1_k(x)| - tau, 0)^2, F1_k and F2_k the inner distances from the
+    /// paired extremity k of each shape, k the one nearest to x in M1 (geometry/InnerDistance.h,
+    /// energy/InnerDistanceTerm.h), at the first innerDistanceLevels levels. c_F = 0: off.
+    double innerDistanceWeight = 0;
+    double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE; ///< tau >= 0, Omega units
+    /// Level of F's lattice; <= 0: DEFAULT_INNER_DISTANCE_LEVEL_2D/3D.
+    int innerDistanceLevel = 0;
+    /// Levels, from the first, at which the term acts (>= 0); 0: every level.
+    int innerDistanceLevels = 0;
     /// Second path, an addition to the paper (docs/numerics.md "Second path"): when more than
     /// secondPathShare of M1's vertices end farther than sigma of the finest level from M2 (a
     /// part of the source left behind by the coarse levels, a local minimum the finest level
@@ -333,6 +350,23 @@ struct AutoLandmarkSummary
     double seconds = 0;
 };
 
+/// What MatchOptions::innerDistanceWeight did: |F2(phi(x)) - F1(x)| over the vertices x of M1,
+/// weighted by their shares of M1's measure (Omega units).
+struct InnerDistanceSummary
+{
+    bool requested = false; ///< innerDistanceWeight > 0
+    bool used = false;      ///< the term acted
+    std::string reason;     ///< why not, when requested && !used
+    double weight = 0, tolerance = 0;
+    int level = 0;          ///< of F's lattice
+    std::size_t points = 0; ///< vertices of M1 in the term
+    double startMean = 0;   ///< at phi = Id
+    double startBeyond = 0; ///< share beyond the tolerance at phi = Id
+    double mean = 0;        ///< at the end
+    double beyond = 0;      ///< share beyond the tolerance at the end
+    double seconds = 0;     ///< F1 and F2
+};
+
 /// Distances of one shape's vertices to the other: |d2(phi(v))| over the vertices v of M1
 /// (MatchResult::residual), or dist(y, phi(M1)) over the vertices y of M2
 /// (MatchResult::targetResidual).
@@ -403,6 +437,7 @@ template <int D> struct MatchResult
     MatchResidual targetResidual;
     LandmarkResidual landmarks;
     AutoLandmarkSummary autoLandmarks;
+    InnerDistanceSummary innerDistance;
     SecondPathSummary secondPath;
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;

@@ -448,6 +448,34 @@ PY
     check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     check match-2d-anchor-count 0 'with [1-7] still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2c7" --levels 4..4 --anchor-count 7
+    check inner-distance-weight-bad 3 '' 'the inner-distance weight and tolerance must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-weight -1 --quiet
+    check inner-distance-levels-bad 1 '' '--inner-distance-levels must be >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-levels -1 --quiet
+    check inner-distance-level-bad 1 '' '--inner-distance-level must be in \[0, 9\]' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-level 12 --quiet
+    check match-2d-inner-distance 0 'inner distance: \|F2_k\(phi\(x\)\) - F1_k\(x\)\| over M1 [0-9.e-]+ \([0-9.e-]+ at phi = Id\)' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2f" --levels 4..6 --inner-distance-weight 1000 --inner-distance-levels 2
+    check match-2d-inner-distance-no-landmarks 0 'inner distance: not used: the automatic landmarks do not act' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fo" --levels 4..4 --inner-distance-weight 1000 --auto-landmarks off
+    check match-2d-inner-distance-config 0 'inner distance: ' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fc" --config "$SCRATCH/m2f/report.json"
+    count=$((count + 1))
+    if "$PYTHON" - "$SCRATCH/m2f" "$SCRATCH/m2fo" "$SCRATCH/m2fc" "$SCRATCH/m2a" <<'PY'; then echo "ok   inner-distance-report"; else fail "inner-distance-report"; fi
+import json, sys
+f, off, again, auto = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+F = f["innerDistance"]
+assert F["used"] and F["reason"] is None and F["weight"] == 1000 and F["tolerance"] == 0.01, F
+assert F["level"] == 8 and F["points"] > 100, F  # 2D: F on the lattice of level 8
+# The term keeps F: less of M1 beyond the tolerance, and a lower mean, than at phi = Id.
+assert F["mean"] < F["startMean"] and F["beyond"] < F["startBeyond"], F
+# It acts at the first two levels (4, 5), not at 6.
+terms = [l["terms"]["innerDistance"] for l in f["levels"]]
+assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
+P = f["parameters"]
+assert P["innerDistanceWeight"] == 1000 and P["innerDistanceLevels"] == 2 and P["innerDistanceLevel"] == 0, P
+O = off["innerDistance"]
+assert not O["used"] and O["reason"] == "the automatic landmarks do not act", O
+assert again["innerDistance"] == dict(F, seconds=again["innerDistance"]["seconds"])
+assert again["result"]["energy"] == f["result"]["energy"]
+# Off (weight 0): no term, not reported.
+assert "innerDistance" not in auto or not auto["innerDistance"]["used"]
+assert all(l["terms"]["innerDistance"] == 0 for l in auto["levels"]) or auto["parameters"]["innerDistanceWeight"] > 0
+PY
     count=$((count + 1))
     if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" "$SCRATCH/m2n" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi
 import json, sys

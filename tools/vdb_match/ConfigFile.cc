@@ -63,6 +63,10 @@ configKeys()
         {"anchorCount", "--anchor-count"},
         {"anchorRadius", "--anchor-radius"},
         {"anchorTolerance", "--anchor-tolerance"},
+        {"innerDistanceWeight", "--inner-distance-weight"},
+        {"innerDistanceTolerance", "--inner-distance-tolerance"},
+        {"innerDistanceLevel", "--inner-distance-level"},
+        {"innerDistanceLevels", "--inner-distance-levels"},
     };
     return keys;
 }

@@ -110,11 +110,15 @@ struct MatchCliOptions
     std::optional<double> anchorWeight;     ///< --anchor-weight (default per dimension)
     std::optional<std::size_t> anchorCount; ///< --anchor-count (default per dimension)
     StillAnchorOptions anchorOptions;       ///< --anchor-radius, --anchor-tolerance
-    std::optional<double> isoValue;         ///< --iso-value: densities converted at this value
-    bool writeInverse = true;               ///< inverse.vdb
-    bool writeJacobian = true;              ///< jacobian.vdb
-    bool logJacobian = false;               ///< jacobian.vdb holds log det
-    bool half = false;                      ///< half-float storage of the vector grids
+    double innerDistanceWeight = MatchOptions::defaults(3).innerDistanceWeight;
+    double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
+    int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
+    int innerDistanceLevels = 0;    ///< --inner-distance-levels (0: every level)
+    std::optional<double> isoValue; ///< --iso-value: densities converted at this value
+    bool writeInverse = true;       ///< inverse.vdb
+    bool writeJacobian = true;      ///< jacobian.vdb
+    bool logJacobian = false;       ///< jacobian.vdb holds log det
+    bool half = false;              ///< half-float storage of the vector grids
     int progressEvery = 10;
     int threads = 0;
     bool quiet = false;
@@ -137,6 +141,18 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                 : ", with " + std::to_string(a.anchors.size()) +
                       " still anchors at every level (M1 and M2 coincide on " +
                       fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
+}
+
+/// One line on what the inner-distance term did.
+std::string
+innerDistanceLine(const InnerDistanceSummary& f)
+{
+    if (!f.used) return "inner distance: not used: " + f.reason;
+    return "inner distance: |F2_k(phi(x)) - F1_k(x)| over M1 " + fixed("%.3g", f.mean) + " (" +
+           fixed("%.3g", f.startMean) + " at phi = Id) of the unit box, " +
+           fixed("%.0f", 100 * f.beyond) + "% of M1 beyond the tolerance " +
+           fixed("%.3g", f.tolerance) + " (" + fixed("%.0f", 100 * f.startBeyond) +
+           "% at phi = Id)";
 }
 
 /// Where a residual is largest: the world position of its vertex in @a shape (the input's
@@ -474,6 +490,41 @@ matchOptionTable()
          [](O& o, const std::string& v) {
              o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);
          }},
+        {"--inner-distance-weight", "X", "Landmarks (an addition to the paper)",
+         "c_F of the inner-distance term, >= 0: when the automatic landmarks act, keep each "
+         "point's inner distance to its nearest extremity's partner, c_F times the mean over M1 "
+         "of max(|F2_k(phi(x)) - F1_k(x)| - tau, 0)^2 (docs/numerics.md); 0: off (default " +
+             formatNumber(d.innerDistanceWeight) + ")",
+         [](O& o, const std::string& v) {
+             o.innerDistanceWeight = parseDouble("--inner-distance-weight", v);
+         }},
+        {"--inner-distance-tolerance", "X", "Landmarks (an addition to the paper)",
+         "tau of the inner-distance term, unit-box lengths, >= 0 (default " +
+             formatNumber(DEFAULT_INNER_DISTANCE_TOLERANCE) + ")",
+         [](O& o, const std::string& v) {
+             o.innerDistanceTolerance = parseDouble("--inner-distance-tolerance", v);
+         }},
+        {"--inner-distance-level", "L", "Landmarks (an addition to the paper)",
+         "level of the lattice on which F is computed, 1.." +
+             std::to_string(MAX_INNER_DISTANCE_LEVEL) + "; 0: the default (" +
+             both(double(DEFAULT_INNER_DISTANCE_LEVEL_3D), double(DEFAULT_INNER_DISTANCE_LEVEL_2D)) +
+             ")",
+         [](O& o, const std::string& v) {
+             const int l = parseInt("--inner-distance-level", v);
+             if (l < 0 || l > MAX_INNER_DISTANCE_LEVEL)
+                 throw UsageError("--inner-distance-level must be in [0, " +
+                                  std::to_string(MAX_INNER_DISTANCE_LEVEL) + "], got " + v);
+             o.innerDistanceLevel = l;
+         }},
+        {"--inner-distance-levels", "N", "Landmarks (an addition to the paper)",
+         "levels, from the first, at which the inner-distance term acts, >= 0; 0: every level "
+         "(default " +
+             std::to_string(d.innerDistanceLevels) + ")",
+         [](O& o, const std::string& v) {
+             o.innerDistanceLevels = parseInt("--inner-distance-levels", v);
+             if (o.innerDistanceLevels < 0)
+                 throw UsageError("--inner-distance-levels must be >= 0, got " + v);
+         }},
         {"--max-iterations", "N", "Descent",
          "iteration limit per level (default " + std::to_string(d.maxIterations) + ")",
          [](O& o, const std::string& v) { o.maxIterations = parseInt("--max-iterations", v); }},
@@ -668,7 +719,8 @@ termsText(const EnergyTerms& t)
     return "match " + fixed("%.3e", t.match[0] + t.match[1]) + " mem " +
            fixed("%.3e", t.mem[0] + t.mem[1]) + " bend " + fixed("%.3e", t.bend[0] + t.bend[1]) +
            " vol " + fixed("%.3e", t.vol[0] + t.vol[1]) +
-           (t.landmark != 0 ? " landmarks " + fixed("%.3e", t.landmark) : std::string());
+           (t.landmark != 0 ? " landmarks " + fixed("%.3e", t.landmark) : std::string()) +
+           (t.innerDistance != 0 ? " inner " + fixed("%.3e", t.innerDistance) : std::string());
 }
 
 /// Progress on stderr with an estimate of the time left: a level is assumed to cost the time
@@ -817,8 +869,10 @@ pairJson(const Real* v)
 Json
 termsJson(const EnergyTerms& t)
 {
-    return Json{{"match", pairJson(t.match)}, {"mem", pairJson(t.mem)},  {"bend", pairJson(t.bend)},
-                {"vol", pairJson(t.vol)},     {"landmarks", t.landmark}, {"total", t.total()}};
+    return Json{{"match", pairJson(t.match)}, {"mem", pairJson(t.mem)},
+                {"bend", pairJson(t.bend)},   {"vol", pairJson(t.vol)},
+                {"landmarks", t.landmark},    {"innerDistance", t.innerDistance},
+                {"total", t.total()}};
 }
 
 template <int D>
@@ -948,6 +1002,10 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorCount", opts.anchorOptions.count},
              {"anchorRadius", opts.anchorOptions.radius},
              {"anchorTolerance", opts.anchorOptions.tolerance},
+             {"innerDistanceWeight", opts.innerDistanceWeight},
+             {"innerDistanceTolerance", opts.innerDistanceTolerance},
+             {"innerDistanceLevel", opts.innerDistanceLevel},
+             {"innerDistanceLevels", opts.innerDistanceLevels},
              {"secondPath", opts.secondPath ? "on" : "off"},
              {"secondPathShare", opts.secondPathShare},
              {"secondPathTarget", opts.secondPathTarget ? "on" : "off"}});
@@ -978,6 +1036,16 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
             j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
             j["autoLandmarks"]["meanWorld"] = r.landmarks.meanWorld;
         }
+    }
+    if (r.innerDistance.requested) {
+        const InnerDistanceSummary& f = r.innerDistance;
+        j["innerDistance"] =
+            Json{{"used", f.used},           {"reason", f.used ? Json() : Json(f.reason)},
+                 {"weight", f.weight},       {"tolerance", f.tolerance},
+                 {"level", f.level},         {"points", f.points},
+                 {"startMean", f.startMean}, {"startBeyond", f.startBeyond},
+                 {"mean", f.mean},           {"beyond", f.beyond},
+                 {"seconds", f.seconds}};
     }
     if (!o.landmarkFiles.empty()) {
         params["landmarks"] = o.landmarkFiles;
@@ -1151,6 +1219,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
+    opts.innerDistanceWeight = o.innerDistanceWeight;
+    opts.innerDistanceTolerance = o.innerDistanceTolerance;
+    opts.innerDistanceLevel = o.innerDistanceLevel;
+    opts.innerDistanceLevels = o.innerDistanceLevels;
     if (o.secondPath) opts.secondPath = *o.secondPath;
     opts.secondPathShare = o.secondPathShare;
     opts.secondPathTarget = o.secondPathTarget;
@@ -1478,6 +1550,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (result.autoLandmarks.requested)
         out << "vdb_match: " << autoLandmarkLine(result.autoLandmarks, opts.multiscale.minLevel)
             << "\n";
+    if (result.innerDistance.requested)
+        out << "vdb_match: " << innerDistanceLine(result.innerDistance) << "\n";
     if (result.secondPath.ran) out << "vdb_match: " << secondPathLine(result.secondPath) << "\n";
     out << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
     for (std::size_t i = 1; i < extra.files.size(); ++i)

@@ -21,7 +21,8 @@ Real
 EnergyTerms::total() const
 {
     if (invertedSimplices > 0) return INF;
-    return match[0] + match[1] + mem[0] + mem[1] + bend[0] + bend[1] + vol[0] + vol[1] + landmark;
+    return match[0] + match[1] + mem[0] + mem[1] + bend[0] + bend[1] + vol[0] + vol[1] + landmark +
+           innerDistance;
 }
 
 EnergyTerms&
@@ -34,6 +35,7 @@ EnergyTerms::operator+=(const EnergyTerms& o)
         vol[i] += o.vol[i];
     }
     landmark += o.landmark;
+    innerDistance += o.innerDistance;
     invertedSimplices += o.invertedSimplices;
     bandSimplices += o.bandSimplices;
     coarseBandSimplices += o.coarseBandSimplices;
@@ -539,11 +541,13 @@ Energy<D>::evaluate(const NodeVectors<D>& u, NodeVectors<D>* gradient, EnergyTer
         if (std::isfinite(sum.total())) {
             L.gatherSlots(perSlot, *gradient, threaded);
             if (mLandmarks) sum.landmark = mLandmarks->addGradient(u, *gradient);
+            if (mInnerDistance) sum.innerDistance = mInnerDistance->addGradient(u, *gradient);
         } else {
             gradient->setZero(D, L.nodeCount());
         }
-    } else if (mLandmarks && std::isfinite(sum.total())) {
-        sum.landmark = mLandmarks->value(u);
+    } else if (std::isfinite(sum.total())) {
+        if (mLandmarks) sum.landmark = mLandmarks->value(u);
+        if (mInnerDistance) sum.innerDistance = mInnerDistance->value(u);
     }
     if (terms) *terms = sum;
     return sum.total();

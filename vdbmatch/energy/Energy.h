@@ -19,6 +19,7 @@
 
 #include <vdbmatch/Parameters.h>
 #include <vdbmatch/ScratchBuffer.h>
+#include <vdbmatch/energy/InnerDistanceTerm.h>
 #include <vdbmatch/energy/LandmarkTerm.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 #include <vdbmatch/kinematics/SurfaceFrame.h>
@@ -41,7 +42,8 @@ struct EnergyTerms
     Real mem[2] = {0, 0};
     Real bend[2] = {0, 0};
     Real vol[2] = {0, 0};
-    Real landmark = 0; ///< E_lm (LandmarkTerm.h), an addition to the paper's terms; 0 without
+    Real landmark = 0;      ///< E_lm (LandmarkTerm.h), an addition to the paper's terms; 0 without
+    Real innerDistance = 0; ///< E_F (InnerDistanceTerm.h), an addition as well; 0 without
     std::size_t invertedSimplices = 0; ///< simplices with det D phi <= 0 (energy +inf)
     std::size_t bandSimplices = 0;     ///< simplices where a band term was evaluated
     /// ... of which in cells larger than h: the band reached beyond the fine region of an
@@ -100,6 +102,9 @@ public:
     /// Adds E_lm of @a landmarks (on the same lattice; must outlive the energy) to every
     /// evaluation; null removes it.
     void setLandmarks(const energy::LandmarkTerm<D>* landmarks) { mLandmarks = landmarks; }
+    /// Adds E_F of @a term (on the same lattice; must outlive the energy) to every evaluation;
+    /// null removes it.
+    void setInnerDistance(const energy::InnerDistanceTerm<D>* term) { mInnerDistance = term; }
 
 private:
     /// The last sample of d2 of the inverse-band test at a simplex: where (y), |d2| there
@@ -181,6 +186,7 @@ private:
     EnergyKind mKind;
     Real mSigma;
     const energy::LandmarkTerm<D>* mLandmarks = nullptr;
+    const energy::InnerDistanceTerm<D>* mInnerDistance = nullptr;
     Real mMatchWeight;  ///< c_match sigma^{-q}
     Real mVolumeWeight; ///< c_vol sigma^theta
 };

@@ -151,6 +151,11 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
             landmarks.emplace(*in.lattice, *in.landmarks);
             energy.setLandmarks(&*landmarks);
         }
+        std::optional<energy::InnerDistanceTerm<D>> innerDistance;
+        if (in.innerDistance && !in.innerDistance->points.empty()) {
+            innerDistance.emplace(*in.lattice, *in.innerDistance);
+            energy.setInnerDistance(&*innerDistance);
+        }
         const Real tau = mOpts.metricTauFactor * energy.sigma() * energy.sigma();
         const solver::H1Metric<D> metric(*in.lattice, tau, mOpts.metric, threaded);
         solver::DescentOptions levelDescent = mOpts.descent;

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <vdbmatch/Parameters.h>
+#include <vdbmatch/energy/InnerDistanceTerm.h>
 #include <vdbmatch/energy/LandmarkTerm.h>
 #include <vdbmatch/geometry/FieldSampler.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
@@ -46,6 +47,9 @@ template <int D> struct Level
     /// Landmark pairs (Omega units) added to the energy (energy::LandmarkTerm); null or empty:
     /// none. Must outlive run().
     const LandmarkPairs<D>* landmarks = nullptr;
+    /// Points of M1 and the field of M2 of the inner-distance term (energy::InnerDistanceTerm);
+    /// null or empty: none. Must outlive run().
+    const InnerDistanceSamples<D>* innerDistance = nullptr;
 };
 
 /// Builds the inputs of level l (called once per level, in increasing order, on the calling
