@@ -134,6 +134,8 @@ MatchOptions::defaults(int dim)
     if (dim == 2) opts.multiscale.metricTauFactor = DEFAULT_MATCH_METRIC_TAU_2D;
     opts.autoLandmarks = true;
     opts.autoAnchors = true;
+    opts.innerDistanceWeight =
+        dim == 2 ? DEFAULT_INNER_DISTANCE_WEIGHT_2D : DEFAULT_INNER_DISTANCE_WEIGHT_3D;
     opts.secondPath = true;
     return opts;
 }
@@ -410,6 +412,12 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                     : (D == 3 ? DEFAULT_INNER_DISTANCE_LEVEL_3D : DEFAULT_INNER_DISTANCE_LEVEL_2D);
     if (!pairs.used) {
         out.reason = "the automatic landmarks do not act";
+        return out;
+    }
+    // Only for an articulation, as the anchors: a stretch or a twist changes F itself.
+    if (pairs.anchors.empty()) {
+        out.reason = "the automatic anchors do not act" +
+                     (pairs.anchorReason.empty() ? std::string() : ": " + pairs.anchorReason);
         return out;
     }
     const auto unit = [&](const std::vector<openvdb::Vec3d>& world) {

@@ -313,8 +313,9 @@ assert pyopenvdb.readAllGridMetadata(sys.argv[1] + "/deformation.vdb")[0]["vdbma
 PY
 check second-path-value 1 '' "--second-path expects 'on' or 'off', got 'maybe'" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path maybe --quiet
 check second-path-share-range 3 '' 'secondPathShare must be in \[0, 1\]' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --second-path-share 2 --quiet
-# (With the 2D default metric weight, one step per level reaches M2; the lighter one of 3D does not.)
-FIG=("$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" --levels 4..6 --max-iterations 1 --metric-tau 0.5 --no-inverse --no-jacobian)
+# (With the 2D default metric weight, one step per level reaches M2; the lighter one of 3D does
+# not. The inner-distance term of the 2D default, too, lets one step reach it: off here.)
+FIG=("$ASSETS/figure_a.polyline" "$ASSETS/figure_b.polyline" --levels 4..6 --max-iterations 1 --metric-tau 0.5 --inner-distance-weight 0 --no-inverse --no-jacobian)
 check second-path-run 0 'second path: .*% of M1 ended farther than sigma from M2 on the first path; energies .* kept path [123] of [23]' '' -- "${FIG[@]}" -o "$SCRATCH/sp"
 check second-path-off 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spoff" --second-path off --quiet
 check second-path-factor 0 'converged|not converged' '' -- "${FIG[@]}" -o "$SCRATCH/spcvf" --second-path off --coarse-volume-factor 4 --quiet
@@ -454,10 +455,13 @@ PY
     check match-2d-inner-distance 0 'inner distance: \|F2_k\(phi\(x\)\) - F1_k\(x\)\| over M1 [0-9.e-]+ \([0-9.e-]+ at phi = Id\)' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2f" --levels 4..6 --inner-distance-weight 1000 --inner-distance-levels 2
     check match-2d-inner-distance-no-landmarks 0 'inner distance: not used: the automatic landmarks do not act' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fo" --levels 4..4 --inner-distance-weight 1000 --auto-landmarks off
     check match-2d-inner-distance-config 0 'inner distance: ' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fc" --config "$SCRATCH/m2f/report.json"
+    # A report of a version before the term reproduces its run without it.
+    "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("innerDistanceWeight"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m2a/report.json" "$SCRATCH/old_inner.json"
+    check match-2d-inner-distance-old-config 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fold" --config "$SCRATCH/old_inner.json" --quiet
     count=$((count + 1))
-    if "$PYTHON" - "$SCRATCH/m2f" "$SCRATCH/m2fo" "$SCRATCH/m2fc" "$SCRATCH/m2a" <<'PY'; then echo "ok   inner-distance-report"; else fail "inner-distance-report"; fi
+    if "$PYTHON" - "$SCRATCH/m2f" "$SCRATCH/m2fo" "$SCRATCH/m2fc" "$SCRATCH/m2a" "$SCRATCH/m2fold" "$SCRATCH/m3" "$SCRATCH/m2n" <<'PY'; then echo "ok   inner-distance-report"; else fail "inner-distance-report"; fi
 import json, sys
-f, off, again, auto = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+f, off, again, auto, old, m3, bare = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
 F = f["innerDistance"]
 assert F["used"] and F["reason"] is None and F["weight"] == 1000 and F["tolerance"] == 0.01, F
 assert F["level"] == 8 and F["points"] > 100, F  # 2D: F on the lattice of level 8
@@ -472,9 +476,18 @@ O = off["innerDistance"]
 assert not O["used"] and O["reason"] == "the automatic landmarks do not act", O
 assert again["innerDistance"] == dict(F, seconds=again["innerDistance"]["seconds"])
 assert again["result"]["energy"] == f["result"]["energy"]
-# Off (weight 0): no term, not reported.
-assert "innerDistance" not in auto or not auto["innerDistance"]["used"]
-assert all(l["terms"]["innerDistance"] == 0 for l in auto["levels"]) or auto["parameters"]["innerDistanceWeight"] > 0
+# The 2D default: c_F = 1000 at every level, when the anchors act (the bundled figure has them).
+assert auto["parameters"]["innerDistanceWeight"] == 1000 and auto["parameters"]["innerDistanceLevels"] == 0
+assert auto["innerDistance"]["used"] and auto["autoLandmarks"]["anchors"] > 0, auto["innerDistance"]
+assert all(l["terms"]["innerDistance"] > 0 for l in auto["levels"]), [l["terms"] for l in auto["levels"]]
+# Off (weight 0): not reported, no term; an old report's run, and the 3D default, are off.
+assert old["parameters"]["innerDistanceWeight"] == 0 and "innerDistance" not in old, old["parameters"]
+assert all(l["terms"]["innerDistance"] == 0 for l in old["levels"])
+assert m3["parameters"]["innerDistanceWeight"] == 0 and "innerDistance" not in m3
+# Without anchors (--auto-anchors off) the term does not act, and says why.
+B = bare["innerDistance"]
+assert not B["used"] and B["reason"].startswith("the automatic anchors do not act"), B
+assert all(l["terms"]["innerDistance"] == 0 for l in bare["levels"])
 PY
     count=$((count + 1))
     if "$PYTHON" - "$SCRATCH/m2o" "$SCRATCH/m2a" "$SCRATCH/m2ar" "$SCRATCH/m2ac" "$SCRATCH/m2g" "$SCRATCH/m2n" <<'PY'; then echo "ok   auto-landmarks-report"; else fail "auto-landmarks-report"; fi

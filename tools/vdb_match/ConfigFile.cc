@@ -161,6 +161,11 @@ parseConfig(const std::string& text, const std::string& path)
         !params.contains("autoAnchors")) {
         settings.push_back({"autoAnchors", "--auto-anchors", "off"});
     }
+    // ... and one before the inner-distance term (no innerDistanceWeight) had none.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("innerDistanceWeight")) {
+        settings.push_back({"innerDistanceWeight", "--inner-distance-weight", "0"});
+    }
     // ... and one before the second path (no secondPath) ran one path.
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("secondPath")) {

@@ -110,7 +110,7 @@ struct MatchCliOptions
     std::optional<double> anchorWeight;     ///< --anchor-weight (default per dimension)
     std::optional<std::size_t> anchorCount; ///< --anchor-count (default per dimension)
     StillAnchorOptions anchorOptions;       ///< --anchor-radius, --anchor-tolerance
-    double innerDistanceWeight = MatchOptions::defaults(3).innerDistanceWeight;
+    std::optional<double> innerDistanceWeight; ///< --inner-distance-weight (default per dimension)
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
     int innerDistanceLevels = 0;    ///< --inner-distance-levels (0: every level)
@@ -491,10 +491,12 @@ matchOptionTable()
              o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);
          }},
         {"--inner-distance-weight", "X", "Landmarks (an addition to the paper)",
-         "c_F of the inner-distance term, >= 0: when the automatic landmarks act, keep each "
+         "c_F of the inner-distance term, >= 0: when the automatic anchors act (an "
+         "articulation), keep each "
          "point's inner distance to its nearest extremity's partner, c_F times the mean over M1 "
          "of max(|F2_k(phi(x)) - F1_k(x)| - tau, 0)^2 (docs/numerics.md); 0: off (default " +
-             formatNumber(d.innerDistanceWeight) + ")",
+             both(DEFAULT_INNER_DISTANCE_WEIGHT_3D, DEFAULT_INNER_DISTANCE_WEIGHT_2D) +
+             "; --preset paper: 0)",
          [](O& o, const std::string& v) {
              o.innerDistanceWeight = parseDouble("--inner-distance-weight", v);
          }},
@@ -1219,7 +1221,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
-    opts.innerDistanceWeight = o.innerDistanceWeight;
+    if (o.innerDistanceWeight) opts.innerDistanceWeight = *o.innerDistanceWeight;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;
     opts.innerDistanceLevel = o.innerDistanceLevel;
     opts.innerDistanceLevels = o.innerDistanceLevels;
