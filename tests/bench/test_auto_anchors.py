@@ -48,7 +48,8 @@ def generate_and_match(root, name, variants):
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
     return generate_and_match(tmp_path_factory.mktemp("anchors"), PAIR,
-                              {"on": ["--auto-anchors", "on"], "off": ["--auto-anchors", "off"]})
+                              {"on": ["--auto-anchors", "on", "--inner-distance-weight", "0"],
+                               "off": ["--auto-anchors", "off", "--inner-distance-weight", "0"]})
 
 
 @pytest.fixture(scope="module")
