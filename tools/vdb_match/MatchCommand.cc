@@ -106,10 +106,10 @@ struct MatchCliOptions
     std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
     std::optional<bool> secondPath;  ///< --second-path on|off (default per preset)
     double secondPathShare = DEFAULT_SECOND_PATH_SHARE;
-    bool secondPathTarget = false;          ///< --second-path-target on|off
-    std::optional<double> anchorWeight;     ///< --anchor-weight (default per dimension)
-    std::optional<std::size_t> anchorCount; ///< --anchor-count (default per dimension)
-    StillAnchorOptions anchorOptions;       ///< --anchor-radius, --anchor-tolerance
+    bool secondPathTarget = false;             ///< --second-path-target on|off
+    std::optional<double> anchorWeight;        ///< --anchor-weight (default per dimension)
+    std::optional<std::size_t> anchorCount;    ///< --anchor-count (default per dimension)
+    StillAnchorOptions anchorOptions;          ///< --anchor-radius, --anchor-tolerance
     std::optional<double> innerDistanceWeight; ///< --inner-distance-weight (default per dimension)
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)

@@ -1,3 +1,4 @@
+#include <vdbmatch/geometry/DenseLattice.h>
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/Extremities.h>
 
@@ -29,15 +30,7 @@ template <int D> struct InteriorGraph
 
     int64_t size() const { return int64_t(distance.size()); }
     bool inside(int64_t i) const { return distance[std::size_t(i)] < 0; }
-    std::array<int, D> coords(int64_t i) const
-    {
-        std::array<int, D> c;
-        for (int a = 0; a < D; ++a) {
-            c[a] = int(i % (n + 1));
-            i /= n + 1;
-        }
-        return c;
-    }
+    std::array<int, D> coords(int64_t i) const { return detail::DenseIndex<D>::coords(i, n); }
     Vec<D> position(int64_t i) const
     {
         const std::array<int, D> c = coords(i);
@@ -72,20 +65,8 @@ interiorGraph(const Surface<D>& surface, int level, bool threaded)
     g.h = std::ldexp(1.0, -level);
     // A narrow band: its inactive values carry the sign inside (-background), and the depth
     // inside is found from it (depthInside()), far cheaper than the distance on the whole box.
-    const openvdb::FloatGrid::Ptr grid =
-        distanceBand<D>(surface, level, MIN_DISTANCE_HALF_WIDTH_VOXELS, threaded);
-    g.background = grid->background();
-    const auto acc = grid->getConstAccessor();
+    g.distance = detail::denseBandDistance<D>(surface, level, threaded, g.background);
     const int64_t m = g.n + 1;
-    int64_t count = 1;
-    for (int a = 0; a < D; ++a)
-        count *= m;
-    g.distance.resize(std::size_t(count));
-    for (int64_t i = 0; i < count; ++i) {
-        const std::array<int, D> c = g.coords(i);
-        const openvdb::Coord ijk(c[0], c[1], D == 3 ? c[D - 1] : 0);
-        g.distance[std::size_t(i)] = acc.getValue(ijk);
-    }
     // The 3^D - 1 neighbours, in a fixed order.
     for (int s = 0; s < (D == 3 ? 27 : 9); ++s) {
         std::array<int, D> step;

@@ -1,4 +1,4 @@
-#include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/DenseLattice.h>
 #include <vdbmatch/geometry/InnerDistance.h>
 
 #include <openvdb/openvdb.h>
@@ -20,30 +20,7 @@ namespace {
 
 enum : uint8_t { FAR = 0, TRIAL = 1, DONE = 2 };
 
-/// The dense lattice's indexing, x fastest.
-template <int D> struct DenseIndex
-{
-    int n = 0;
-    std::array<int64_t, D> stride{};
-    int64_t size = 1;
-
-    explicit DenseIndex(int cells) : n(cells)
-    {
-        for (int a = 0; a < D; ++a) {
-            stride[a] = size;
-            size *= n + 1;
-        }
-    }
-    std::array<int, D> coords(int64_t i) const
-    {
-        std::array<int, D> c;
-        for (int a = 0; a < D; ++a) {
-            c[a] = int(i % (n + 1));
-            i /= n + 1;
-        }
-        return c;
-    }
-};
+using detail::DenseIndex;
 
 /// The first-order fast marching method on the nodes that @a allowed admits.
 template <int D> class FastMarch
@@ -259,16 +236,14 @@ innerDistanceFields(const Surface<D>& unitSurface, const std::vector<Vec<D>>& so
                           "innerDistanceFields: a source point has a coordinate that is not "
                           "finite");
     }
-    const openvdb::FloatGrid::Ptr grid =
-        distanceBand<D>(unitSurface, level, MIN_DISTANCE_HALF_WIDTH_VOXELS, threaded);
-    const auto acc = grid->getConstAccessor();
+    float background = 0;
+    const std::vector<float> distance =
+        detail::denseBandDistance<D>(unitSurface, level, threaded, background);
     const DenseIndex<D> index(1 << level);
     std::vector<uint8_t> inside(std::size_t(index.size), 0);
     std::size_t insideNodes = 0;
     for (int64_t i = 0; i < index.size; ++i) {
-        const std::array<int, D> c = index.coords(i);
-        const openvdb::Coord ijk(c[0], c[1], D == 3 ? c[D - 1] : 0);
-        inside[std::size_t(i)] = acc.getValue(ijk) < 0;
+        inside[std::size_t(i)] = distance[std::size_t(i)] < 0;
         insideNodes += inside[std::size_t(i)];
     }
     std::vector<InnerDistanceField<D>> out(sources.size());
