@@ -221,6 +221,13 @@ MatchOptions::validate(int dim) const
                           << "; memory grows " << (dim == 2 ? 2 : 4)
                           << "x per level: level 8 of a 3D pair takes about 0.8 GB)");
     }
+    if (dim == 3 && innerDistanceLevel > MAX_INNER_DISTANCE_LEVEL_3D) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: innerDistanceLevel is at most "
+                          << MAX_INNER_DISTANCE_LEVEL_3D << " in 3D (got " << innerDistanceLevel
+                          << "; each extremity's field takes 14 bytes per node while it is "
+                             "computed, (2^level + 1)^3 nodes: 240 MB at level 8)");
+    }
 }
 
 template <int D>

@@ -74,7 +74,8 @@ constexpr double DEFAULT_INNER_DISTANCE_WEIGHT_3D = 0;
 constexpr double DEFAULT_INNER_DISTANCE_TOLERANCE = 0.01;
 constexpr int DEFAULT_INNER_DISTANCE_LEVEL_2D = 8;
 constexpr int DEFAULT_INNER_DISTANCE_LEVEL_3D = 7;
-constexpr int MAX_INNER_DISTANCE_LEVEL = 9; ///< (2^9 + 1)^3 nodes, 1 GB of doubles in 3D
+constexpr int MAX_INNER_DISTANCE_LEVEL = 9;    ///< in 2D; validate(dim) checks 3D against:
+constexpr int MAX_INNER_DISTANCE_LEVEL_3D = 8; ///< (2^8 + 1)^3 nodes per extremity's field
 /// Default most automatic anchors (StillAnchorOptions::count, --anchor-count) in 2D and 3D:
 /// about the same spacing on a 3D surface as on a 2D outline (0.024-0.029 of the box on the
 /// benchmark's 3D shapes, about 0.027 on the 2D figure). 300 rather than 100 in 3D lowered the

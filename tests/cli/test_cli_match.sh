@@ -60,6 +60,7 @@ check c-match-range 3 '' 'c_match must be in' -- "$SPHERE" "$ELLIPSOID" -o "$SCR
 
 # ---------------------------------------------------------------- 3D end to end (0)
 check match-3d 0 'converged|not converged' 'level 5 done' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3" --levels 3..5
+check inner-distance-level-3d 3 '' 'innerDistanceLevel is at most 8 in 3D' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --inner-distance-level 9 --quiet
 count=$((count + 1))
 if command -v vdb_print >/dev/null 2>&1; then
     # (captured first: grep -q closing the pipe early would fail the pipeline under pipefail)

@@ -508,7 +508,8 @@ matchOptionTable()
          }},
         {"--inner-distance-level", "L", "Landmarks (an addition to the paper)",
          "level of the lattice on which F is computed, 1.." +
-             std::to_string(MAX_INNER_DISTANCE_LEVEL) + "; 0: the default (" +
+             std::to_string(MAX_INNER_DISTANCE_LEVEL) + " (" +
+             std::to_string(MAX_INNER_DISTANCE_LEVEL_3D) + " in 3D); 0: the default (" +
              both(double(DEFAULT_INNER_DISTANCE_LEVEL_3D), double(DEFAULT_INNER_DISTANCE_LEVEL_2D)) +
              ")",
          [](O& o, const std::string& v) {
