@@ -747,6 +747,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     if (opts.innerDistanceWeight > 0) {
         result.innerDistance = innerDistanceSamples(unitSource, unitTarget, placement,
                                                     result.autoLandmarks, opts, inner);
+        if (observer.innerDistance) observer.innerDistance(result.innerDistance);
     }
     std::shared_ptr<const FieldSampler<D>> lastTarget;
     LevelSummary pending;

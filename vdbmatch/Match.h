@@ -467,6 +467,9 @@ struct MatchObserver
     std::function<void(const LevelSummary&)> levelEnd;
     /// After the automatic landmarks were looked for, before the first level (when requested).
     std::function<void(const AutoLandmarkSummary&)> autoLandmarks;
+    /// After the inner-distance fields were computed, or the term found not to act, before the
+    /// first level (when innerDistanceWeight > 0; mean and beyond are not set yet).
+    std::function<void(const InnerDistanceSummary&)> innerDistance;
     /// Before each path after the first starts (MatchOptions::secondPath; paths holds those run
     /// so far, done is false), and once more when the last one ended (done, kept set).
     std::function<void(const SecondPathSummary&)> secondPath;

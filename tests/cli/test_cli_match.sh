@@ -453,6 +453,7 @@ PY
     check inner-distance-weight-bad 3 '' 'the inner-distance weight and tolerance must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-weight -1 --quiet
     check inner-distance-levels-bad 1 '' '--inner-distance-levels must be >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-levels -1 --quiet
     check inner-distance-level-bad 1 '' '--inner-distance-level must be in \[0, 9\]' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-level 12 --quiet
+    check match-2d-inner-distance-progress 0 '' 'inner distance: F from each paired extremity on the lattice of level 8 \([0-9.]+ s\), over [0-9]+ vertices of M1, weight 1000, tolerance 0.01' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fp" --levels 4..4
     check match-2d-inner-distance 0 'inner distance: \|F2_k\(phi\(x\)\) - F1_k\(x\)\| over M1 [0-9.e-]+ \([0-9.e-]+ at phi = Id\)' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2f" --levels 4..6 --inner-distance-weight 1000 --inner-distance-levels 2
     check match-2d-inner-distance-no-landmarks 0 'inner distance: not used: the automatic landmarks do not act' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fo" --levels 4..4 --inner-distance-weight 1000 --auto-landmarks off
     check match-2d-inner-distance-config 0 'inner distance: ' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fc" --config "$SCRATCH/m2f/report.json"

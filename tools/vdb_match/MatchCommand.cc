@@ -143,6 +143,18 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                       fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
 }
 
+/// One line on the inner-distance term before the first level: its fields, or why it does not
+/// act.
+std::string
+innerDistanceStartLine(const InnerDistanceSummary& f)
+{
+    if (!f.used) return "inner distance: not used: " + f.reason;
+    return "inner distance: F from each paired extremity on the lattice of level " +
+           std::to_string(f.level) + " (" + fixed("%.1f", f.seconds) + " s), over " +
+           std::to_string(f.points) + " vertices of M1, weight " + fixed("%.4g", f.weight) +
+           ", tolerance " + fixed("%.3g", f.tolerance);
+}
+
 /// One line on what the inner-distance term did.
 std::string
 innerDistanceLine(const InnerDistanceSummary& f)
@@ -1316,6 +1328,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     observer.levelEnd = [&](const LevelSummary& s) { progress->levelEnd(s); };
     observer.autoLandmarks = [&](const AutoLandmarkSummary& a) {
         progress->message(autoLandmarkLine(a, opts.multiscale.minLevel));
+    };
+    observer.innerDistance = [&](const InnerDistanceSummary& f) {
+        progress->message(innerDistanceStartLine(f));
     };
     observer.secondPath = [&](const SecondPathSummary& sp) {
         progress->message(secondPathLine(sp));
