@@ -400,13 +400,14 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     return out;
 }
 
-/// MatchOptions::innerDistanceWeight: F1_k, F2_k from each pair k of extremities (the automatic
-/// landmarks) and the vertices of M1 with their shares of its measure and nearest extremity;
-/// @a samples stays empty when the term does not act (the summary says why).
+/// MatchOptions::innerDistanceWeight: F1_k, F2_k from each pair k of extremities (@a landmarks,
+/// Omega units: the automatic landmarks when @a pairs says they are used) and the vertices of
+/// M1 with their shares of its measure and nearest extremity; @a samples stays empty when the
+/// term does not act (the summary says why).
 template <int D>
 InnerDistanceSummary
 innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
-                     const UnitBoxPlacement& placement, const AutoLandmarkSummary& pairs,
+                     const LandmarkPairs<D>& landmarks, const AutoLandmarkSummary& pairs,
                      const MatchOptions& opts, InnerDistanceSamples<D>& samples)
 {
     const Clock::time_point start = Clock::now();
@@ -427,24 +428,12 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                      (pairs.anchorReason.empty() ? std::string() : ": " + pairs.anchorReason);
         return out;
     }
-    const auto unit = [&](const std::vector<openvdb::Vec3d>& world) {
-        std::vector<Vec<D>> points;
-        for (const openvdb::Vec3d& w : world) {
-            const openvdb::Vec3d u = placement.toUnit(w);
-            Vec<D> p;
-            for (int a = 0; a < D; ++a)
-                p[a] = u[a];
-            points.push_back(p);
-        }
-        return points;
-    };
-    const std::vector<Vec<D>> a = unit(pairs.source), b = unit(pairs.target);
     std::vector<InnerDistanceField<D>> f1, f2;
     auto buildSource = [&] {
-        f1 = innerDistanceFields<D>(unitSource, a, out.level, opts.threaded);
+        f1 = innerDistanceFields<D>(unitSource, landmarks.source, out.level, opts.threaded);
     };
     auto buildTarget = [&] {
-        f2 = innerDistanceFields<D>(unitTarget, b, out.level, opts.threaded);
+        f2 = innerDistanceFields<D>(unitTarget, landmarks.target, out.level, opts.threaded);
     };
     detail::invokeBoth(opts.threaded, buildSource, buildTarget);
     for (std::size_t k = 0; k < f1.size(); ++k) {
@@ -745,7 +734,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     // The inner-distance term (energy/InnerDistanceTerm.h), from the paired extremities.
     InnerDistanceSamples<D> inner;
     if (opts.innerDistanceWeight > 0) {
-        result.innerDistance = innerDistanceSamples(unitSource, unitTarget, placement,
+        result.innerDistance = innerDistanceSamples(unitSource, unitTarget, landmarks,
                                                     result.autoLandmarks, opts, inner);
         if (observer.innerDistance) observer.innerDistance(result.innerDistance);
     }
