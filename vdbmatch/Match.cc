@@ -194,6 +194,11 @@ MatchOptions::validate() const
                       ">= 0, got "
                           << innerDistanceWeight << " and " << innerDistanceTolerance);
     }
+    if (!(innerDistanceRatio >= 1) || !std::isfinite(innerDistanceRatio)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: innerDistanceRatio must be finite and >= 1, got "
+                          << innerDistanceRatio);
+    }
     if (innerDistanceLevel > MAX_INNER_DISTANCE_LEVEL) {
         OPENVDB_THROW(openvdb::ValueError, "MatchOptions: innerDistanceLevel must be at most "
                                                << MAX_INNER_DISTANCE_LEVEL << ", got "
@@ -464,27 +469,31 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         total += m;
     }
     // Each vertex keeps its inner distance to the extremity of M1 nearest to it (the first of
-    // equals).
+    // equals), when the next one is at least innerDistanceRatio times as far: where two are
+    // about as near, the paths from both cross a joint, which an articulation turns.
+    Real kept = 0;
     for (std::size_t i = 0; i < unitSource.points.size(); ++i) {
         if (!(share[i] > 0)) continue;
-        Real best = INF;
-        uint32_t nearest = 0;
-        for (std::size_t k = 0; k < f1.size(); ++k) {
-            Real f;
-            f1[k].sample(unitSource.points[i], f);
-            if (f < best) {
-                best = f;
-                nearest = uint32_t(k);
-            }
-        }
+        Real best;
+        const int nearest = ownSource<D>(f1, unitSource.points[i], opts.innerDistanceRatio, best);
+        if (nearest < 0) continue;
+        kept += share[i];
         samples.points.push_back(unitSource.points[i]);
         samples.values.push_back(best);
-        samples.fields.push_back(nearest);
+        samples.fields.push_back(uint32_t(nearest));
         samples.weights.push_back(Real(opts.innerDistanceWeight) * share[i] / total);
     }
     samples.tolerance = Real(opts.innerDistanceTolerance);
-    out.used = true;
+    out.ratio = opts.innerDistanceRatio;
     out.points = samples.points.size();
+    out.share = total > 0 ? double(kept / total) : 0.0;
+    if (samples.points.empty()) {
+        out.reason = "no vertex of M1 has an extremity clearly its own (innerDistanceRatio)";
+        samples = InnerDistanceSamples<D>();
+        out.seconds = secondsSince(start);
+        return out;
+    }
+    out.used = true;
     // At phi = Id: how far F changes between the shapes at the same place.
     Real sum = 0, beyond = 0;
     for (std::size_t i = 0; i < samples.points.size(); ++i) {
@@ -495,8 +504,8 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         sum += w * r;
         if (r > samples.tolerance) beyond += w;
     }
-    out.startMean = sum;
-    out.startBeyond = beyond;
+    out.startMean = sum / (kept / total);
+    out.startBeyond = beyond / (kept / total);
     out.seconds = secondsSince(start);
     return out;
 }

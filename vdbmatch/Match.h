@@ -72,6 +72,11 @@ constexpr double DEFAULT_LANDMARK_WEIGHT = 1000;
 constexpr double DEFAULT_INNER_DISTANCE_WEIGHT_2D = 1000;
 constexpr double DEFAULT_INNER_DISTANCE_WEIGHT_3D = 0;
 constexpr double DEFAULT_INNER_DISTANCE_TOLERANCE = 0.01;
+/// MatchOptions::innerDistanceRatio: 1, every vertex of M1 in the inner-distance term. Keeping
+/// only the vertices whose second-nearest extremity is 1.5-3 times as far as the nearest was
+/// measured and is not the default (five runs of the 2D benchmark: no variant better on every
+/// pair; docs/numerics.md "The inner distance", *Which points*).
+constexpr double DEFAULT_INNER_DISTANCE_RATIO = 1;
 constexpr int DEFAULT_INNER_DISTANCE_LEVEL_2D = 8;
 constexpr int DEFAULT_INNER_DISTANCE_LEVEL_3D = 7;
 constexpr int MAX_INNER_DISTANCE_LEVEL = 9;    ///< in 2D; validate(dim) checks 3D against:
@@ -263,6 +268,11 @@ struct MatchOptions
     /// (paper(), and defaults(3)); defaults(2): DEFAULT_INNER_DISTANCE_WEIGHT_2D.
     double innerDistanceWeight = 0;
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE; ///< tau >= 0, Omega units
+    /// >= 1: only the vertices x of M1 whose second-nearest extremity is at least this many
+    /// times as far as the nearest (F1 inside M1) are in the term; 1: every vertex. Where two
+    /// extremities are about as near (the body between the limbs, a hand hanging by the hip),
+    /// an articulation changes the distance to either.
+    double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     /// Level of F's lattice; <= 0: DEFAULT_INNER_DISTANCE_LEVEL_2D/3D.
     int innerDistanceLevel = 0;
     /// Levels, from the first, at which the term acts (>= 0); 0: every level.
@@ -366,7 +376,9 @@ struct InnerDistanceSummary
     std::string reason;     ///< why not, when requested && !used
     double weight = 0, tolerance = 0;
     int level = 0;          ///< of F's lattice
+    double ratio = 0;       ///< MatchOptions::innerDistanceRatio
     std::size_t points = 0; ///< vertices of M1 in the term
+    double share = 0;       ///< their share of M1's measure
     double startMean = 0;   ///< at phi = Id
     double startBeyond = 0; ///< share beyond the tolerance at phi = Id
     double mean = 0;        ///< at the end

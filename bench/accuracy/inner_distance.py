@@ -3,7 +3,7 @@
 (issue: correspondence; docs/results.md, "The inner distance to the nearest extremity").
 
     inner_distance.py --pair PAIRDIR --run LABEL=FORWARD_DIR [--run ...] [--pixel 0.004]
-                      [--radius 15 --radius 30]
+                      [--radius 15 --radius 30] [--ratio 1 --ratio 1.5 ...]
 
 PAIRDIR is a 2D pair of bench/accuracy/make_pairs.py (source.polyline, target_resampled.polyline,
 truth.xyz); FORWARD_DIR a vdb_match match output of it (deformed.obj, and report.json with the
@@ -23,7 +23,17 @@ err and motion as score.py; "moving" the mean of |F2(g(v)) - F1(v)| (g) and |F2(
 (phi) over the vertices g moves by more than 5 x 10^-3 of the box, "all" over every vertex; and
 for each --radius R (10^-3 of the box) the error of an oracle of a term that would move phi(v)
 along M2 to keep F: among the points of M2 (its vertices and three points per edge) within R of
-phi(v), the one whose F2 is closest to F1(v). Exit status 2 for bad usage or unreadable input.
+phi(v), the one whose F2 is closest to F1(v).
+
+With --ratio R, also the distance to each point's *own* extremity, as the inner-distance term
+of vdb_match keeps it (docs/numerics.md, "The inner distance"): F1,k and F2,k from each paired
+extremity k alone, k the one nearest to v in M1, over the vertices whose second-nearest
+extremity is at least R times as far (`--inner-distance-ratio`; 1: every vertex):
+
+    ... own@R share S g A phi B
+
+S the percentage of M1's vertices kept, A and B the means of |F2,k(g(v)) - F1,k(v)| and
+|F2,k(phi(v)) - F1,k(v)| over them. Exit status 2 for bad usage or unreadable input.
 """
 
 import argparse
@@ -172,12 +182,17 @@ def main(argv=None):
     ap.add_argument("--pair", required=True)
     ap.add_argument("--run", action="append", required=True, metavar="LABEL=FORWARD_DIR")
     ap.add_argument("--pixel", type=float, default=0.004, help="world units (default 0.004)")
+    ap.add_argument("--ratio", type=float, action="append", default=[],
+                    help="also the distance to each point's own extremity, over the points whose "
+                         "second-nearest extremity is at least R times as far (>= 1)")
     ap.add_argument("--radius", type=float, action="append",
                     help="oracle radius, 10^-3 of the box (default 15 and 30)")
     a = ap.parse_args(argv)
     radii = a.radius or [15.0, 30.0]
     if a.pixel <= 0 or any(r <= 0 for r in radii):
         fail("--pixel and --radius must be > 0")
+    if any(not (r >= 1) for r in a.ratio):
+        fail("--ratio must be >= 1")
     try:
         pair = json.load(open(os.path.join(a.pair, "pair.json")))
         if pair.get("dimension") != 2:
@@ -212,8 +227,17 @@ def main(argv=None):
                 f2 = InnerDistance(tgt, [p["target"] for p in pairs], lo, hi, a.pixel)
             except ValueError as e:
                 fail(str(e))
-            cache[key] = (f1(verts), f2, f2(truth), f2(candidates))
-        f1v, f2, f2g, f2c = cache[key]
+            own = None
+            if a.ratio:
+                try:
+                    f1k = np.array([InnerDistance(src, [p["source"]], lo, hi, a.pixel)(verts)
+                                    for p in pairs])
+                    f2k = [InnerDistance(tgt, [p["target"]], lo, hi, a.pixel) for p in pairs]
+                except ValueError as e:
+                    fail(str(e))
+                own = (f1k, f2k, np.array([f(truth) for f in f2k]))
+            cache[key] = (f1(verts), f2, f2(truth), f2(candidates), own)
+        f1v, f2, f2g, f2c, own = cache[key]
         k = 1e3 * scale
         motion = np.linalg.norm(truth - verts, axis=1) * scale
         moving = motion > MOVING
@@ -227,6 +251,20 @@ def main(argv=None):
         for r in radii:
             o = oracle(phi, f1v, candidates, f2c, r / k)
             line += "  oracle@%g %.4g" % (r, np.linalg.norm(o - truth, axis=1).mean() * k)
+        if own is not None:
+            f1k, f2k, f2kg = own
+            nearest = f1k.argmin(0)
+            ordered = np.sort(f1k, 0)
+            second = ordered[1] if len(f1k) > 1 else np.full(len(verts), np.inf)
+            i = np.arange(len(verts))
+            mine = f1k[nearest, i]
+            dg = np.abs(f2kg[nearest, i] - mine) * k
+            f2kp = np.array([f(phi) for f in f2k])
+            dp = np.abs(f2kp[nearest, i] - mine) * k
+            for r in a.ratio:
+                kept = second >= r * mine
+                line += "  own@%g share %.4g g %.4g phi %.4g" % (
+                    r, 100 * kept.mean(), mean(dg, kept), mean(dp, kept))
         print(line)
 
 

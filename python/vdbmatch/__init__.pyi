@@ -82,6 +82,7 @@ def match(
     anchor_tolerance: float | None = None,
     inner_distance_weight: float | None = None,
     inner_distance_tolerance: float | None = None,
+    inner_distance_ratio: float | None = None,
     inner_distance_level: int | None = None,
     inner_distance_levels: int | None = None,
     max_iterations: int | None = None,

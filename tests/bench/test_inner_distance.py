@@ -1,7 +1,8 @@
 """bench/accuracy/inner_distance.py, the measure of whether a 2D match keeps the inner distance to
 the nearest limb end (docs/results.md, "The inner distance to the nearest extremity"): a rigid
 motion keeps it, a slide of the skin along the limb changes it by the slide, the oracle undoes the
-slide, and bad input is refused with exit status 2."""
+slide, the distance to each point's own end (--ratio) leaves out the middle of the limb, and bad
+input is refused with exit status 2."""
 
 import json
 import math
@@ -69,6 +70,10 @@ def parse(line):
         if tok[i] in ("moving", "all"):
             out[tok[i] + " g"], out[tok[i] + " phi"] = float(tok[i + 2]), float(tok[i + 4])
             i += 5
+        elif tok[i].startswith("own@"):
+            out[tok[i]] = {"share": float(tok[i + 2]), "g": float(tok[i + 4]),
+                           "phi": float(tok[i + 6])}
+            i += 7
         else:
             out[tok[i]] = float(tok[i + 1])
             i += 2
@@ -103,6 +108,29 @@ def test_rigid_motion_keeps_the_inner_distance_and_a_slide_does_not(tmp_path, ca
     picked = idist.oracle(rigid(slid)[side], f1(src)[side], candidates, f2(candidates), 0.06)
     # (M2's candidates lie 0.005 apart: within two of them, a fifth of the slide)
     assert np.linalg.norm(picked - truth[side], axis=1).mean() < 0.01
+
+
+def test_own_extremity_leaves_out_the_middle_of_the_limb(tmp_path, capsys):
+    pair, exact, _ = write_case(tmp_path, 0.0)
+    _, slid, side = write_case(tmp_path, 0.05)
+    idist.main(["--pair", pair, "--run", "exact=" + exact, "--run", "slid=" + slid,
+                "--ratio", "1", "--ratio", "1.5"])
+    a, b = [parse(x) for x in capsys.readouterr().out.strip().split("\n")]
+    # Ratio 1 keeps every vertex; 1.5 leaves out the long sides' middle, where the two ends are
+    # about as far: x in (0.41, 0.59) of the 2.2 of outline, about 16% of the vertices.
+    assert a["own@1"]["share"] == 100 and b["own@1"]["share"] == 100
+    assert 78 < a["own@1.5"]["share"] < 90, a
+    # A rigid g keeps each point's distance to its own end, as it keeps the distance to the
+    # nearest; the slide (0.1 < x < 0.4, kept at 1.5) changes it by the slide on the slid
+    # vertices, so the kept mean is at least the slide times their share among the kept.
+    for r in ("own@1", "own@1.5"):
+        assert a[r]["g"] == a[r]["phi"] < 4.0, a
+    kept = 0.01 * b["own@1.5"]["share"]
+    assert b["own@1.5"]["phi"] > 0.8 * 50.0 * side.mean() / kept, b
+    assert b["own@1.5"]["phi"] > 4 * b["own@1.5"]["g"], b
+    with pytest.raises(SystemExit) as e:
+        idist.main(["--pair", pair, "--run", "x=" + exact, "--ratio", "0.5"])
+    assert e.value.code == 2
 
 
 def test_bad_input_exits_2(tmp_path, capsys):

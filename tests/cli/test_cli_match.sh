@@ -454,18 +454,32 @@ PY
     check inner-distance-levels-bad 1 '' '--inner-distance-levels must be >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-levels -1 --quiet
     check inner-distance-level-bad 1 '' '--inner-distance-level must be in \[0, 9\]' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-level 12 --quiet
     check match-2d-inner-distance-progress 0 '' 'inner distance: F from each paired extremity on the lattice of level 8 \([0-9.]+ s\), over [0-9]+ vertices of M1, weight 1000, tolerance 0.01' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fp" --levels 4..4
+    check inner-distance-ratio-bad 1 '' '--inner-distance-ratio must be finite and >= 1, got 0.5' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --inner-distance-ratio 0.5 --quiet
+    check match-2d-inner-distance-ratio 0 '' 'inner distance: F from each paired extremity on the lattice of level 8 \([0-9.]+ s\), over [0-9]+ vertices of M1 \([0-9]+% of it: those whose second-nearest extremity is at least 1.5x as far as their nearest\), weight 1000' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fr" --levels 4..4 --inner-distance-ratio 1.5
     check match-2d-inner-distance 0 'inner distance: \|F2_k\(phi\(x\)\) - F1_k\(x\)\| over M1 [0-9.e-]+ \([0-9.e-]+ at phi = Id\)' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2f" --levels 4..6 --inner-distance-weight 1000 --inner-distance-levels 2
     check match-2d-inner-distance-no-landmarks 0 'inner distance: not used: the automatic landmarks do not act' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fo" --levels 4..4 --inner-distance-weight 1000 --auto-landmarks off
     check match-2d-inner-distance-config 0 'inner distance: ' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fc" --config "$SCRATCH/m2f/report.json"
     # A report of a version before the term reproduces its run without it.
     "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("innerDistanceWeight"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m2a/report.json" "$SCRATCH/old_inner.json"
     check match-2d-inner-distance-old-config 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2fold" --config "$SCRATCH/old_inner.json" --quiet
+    # ... and one from before innerDistanceRatio kept every vertex in the term.
+    "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("innerDistanceRatio"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m2fr/report.json" "$SCRATCH/old_ratio.json"
+    check match-2d-inner-distance-old-ratio 0 '' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2frold" --config "$SCRATCH/old_ratio.json" --quiet
     count=$((count + 1))
-    if "$PYTHON" - "$SCRATCH/m2f" "$SCRATCH/m2fo" "$SCRATCH/m2fc" "$SCRATCH/m2a" "$SCRATCH/m2fold" "$SCRATCH/m3" "$SCRATCH/m2n" <<'PY'; then echo "ok   inner-distance-report"; else fail "inner-distance-report"; fi
+    if "$PYTHON" - "$SCRATCH/m2f" "$SCRATCH/m2fo" "$SCRATCH/m2fc" "$SCRATCH/m2a" "$SCRATCH/m2fold" "$SCRATCH/m3" "$SCRATCH/m2n" "$SCRATCH/m2fr" "$SCRATCH/m2fp" "$SCRATCH/m2frold" <<'PY'; then echo "ok   inner-distance-report"; else fail "inner-distance-report"; fi
 import json, sys
-f, off, again, auto, old, m3, bare = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
+f, off, again, auto, old, m3, bare, one, every, oldratio = (json.load(open(d + "/report.json")) for d in sys.argv[1:])
 F = f["innerDistance"]
 assert F["used"] and F["reason"] is None and F["weight"] == 1000 and F["tolerance"] == 0.01, F
+# --inner-distance-ratio 1.5 leaves out the points about as near to two extremities; the
+# default, 1, keeps every vertex (all of M1's measure), and so does a run from an old report
+# (no innerDistanceRatio), here one of ratio 1.5.
+A, E = one["innerDistance"], every["innerDistance"]
+assert one["parameters"]["innerDistanceRatio"] == 1.5 and A["ratio"] == 1.5, A
+assert every["parameters"]["innerDistanceRatio"] == 1 and E["ratio"] == 1, E
+assert 0.3 < A["share"] < 0.95 and abs(E["share"] - 1) < 1e-9, (A, E)
+assert 100 < A["points"] < E["points"], (A, E)
+assert oldratio["parameters"]["innerDistanceRatio"] == 1 and oldratio["innerDistance"]["points"] == E["points"]
 assert F["level"] == 8 and F["points"] > 100, F  # 2D: F on the lattice of level 8
 # The term keeps F: less of M1 beyond the tolerance, and a lower mean, than at phi = Id.
 assert F["mean"] < F["startMean"] and F["beyond"] < F["startBeyond"], F

@@ -4,7 +4,8 @@
 ///        not depend on the direction, unlike an 8-neighbour graph's 8% along 22.5 degrees), the
 ///        path round the slot of a U rather than across it, a turn of the shape and its sources
 ///        turning F with them, a finite 1-Lipschitz continuation outside, the interpolant's
-///        gradient, thread-count independence and bad input.
+///        gradient, thread-count independence, bad input, and a point's own source (the nearer
+///        end of a bar, none in its middle).
 
 #include "support/TestSurfaces.h"
 
@@ -215,4 +216,41 @@ TEST(InnerDistance, EmptyWithoutAnInsideNodeAndRefusesBadInput)
     EXPECT_NEAR(v, 0.4, 3 * g.h);
     EXPECT_THROW(innerDistanceFields<2>(disc, {Vec<2>(std::nan(""), 0.5)}, 6), openvdb::ValueError);
     EXPECT_THROW(innerDistanceFields<2>(Surface<2>(), {Vec<2>(0.5, 0.5)}, 6), openvdb::ValueError);
+}
+
+TEST(InnerDistance, OwnSourceIsTheNearerEndOfABarOrNoneInItsMiddle)
+{
+    // A bar 0.6 long and 0.1 wide, a source near each end: inside, F_A(x) ~ x - 0.21 and
+    // F_B(x) ~ 0.79 - x along it, so F_B >= 1.5 F_A left of x = (0.79 + 1.5 * 0.21) / 2.5 =
+    // 0.442, and F_A >= 1.5 F_B right of 0.558.
+    const Surface<2> bar = polygon(
+        {Vec<2>(0.2, 0.45), Vec<2>(0.8, 0.45), Vec<2>(0.8, 0.55), Vec<2>(0.2, 0.55)}, 0.005);
+    const std::vector<InnerDistanceField<2>> f =
+        innerDistanceFields<2>(bar, {Vec<2>(0.21, 0.5), Vec<2>(0.79, 0.5)}, 8);
+    ASSERT_EQ(f.size(), 2u);
+    Real v;
+    for (double y : {0.45, 0.5, 0.55}) { // on both long sides and the axis
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.30, y), 1.5, v), 0) << y;
+        EXPECT_NEAR(v, std::hypot(0.30 - 0.21, y - 0.5), 2 * f[0].h);
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.42, y), 1.5, v), 0) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.47, y), 1.5, v), -1) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.50, y), 1.5, v), -1) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.53, y), 1.5, v), -1) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.58, y), 1.5, v), 1) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.70, y), 1.5, v), 1) << y;
+        // Ratio 1: every point has the nearer end, the middle included.
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.49, y), 1.0, v), 0) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.51, y), 1.0, v), 1) << y;
+        // A larger ratio keeps less of the bar: at x = 0.30, B is 4.8x (the sides) to 5.4x
+        // (the axis) as far as A.
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.30, y), 4.0, v), 0) << y;
+        EXPECT_EQ(ownSource<2>(f, Vec<2>(0.30, y), 6.0, v), -1) << y;
+    }
+    // One source: always its own; an empty field is skipped; none at all: -1.
+    EXPECT_EQ(ownSource<2>({f[1]}, Vec<2>(0.21, 0.5), 10.0, v), 0);
+    const InnerDistanceField<2> none;
+    EXPECT_EQ(ownSource<2>({none, f[1]}, Vec<2>(0.3, 0.5), 1.5, v), 1);
+    EXPECT_EQ(ownSource<2>({none}, Vec<2>(0.3, 0.5), 1.5, v), -1);
+    EXPECT_THROW(ownSource<2>(f, Vec<2>(0.3, 0.5), 0.9, v), openvdb::ValueError);
+    EXPECT_THROW(ownSource<2>(f, Vec<2>(0.3, 0.5), std::nan(""), v), openvdb::ValueError);
 }

@@ -65,6 +65,7 @@ configKeys()
         {"anchorTolerance", "--anchor-tolerance"},
         {"innerDistanceWeight", "--inner-distance-weight"},
         {"innerDistanceTolerance", "--inner-distance-tolerance"},
+        {"innerDistanceRatio", "--inner-distance-ratio"},
         {"innerDistanceLevel", "--inner-distance-level"},
         {"innerDistanceLevels", "--inner-distance-levels"},
     };
@@ -165,6 +166,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("innerDistanceWeight")) {
         settings.push_back({"innerDistanceWeight", "--inner-distance-weight", "0"});
+    }
+    // ... and one from before innerDistanceRatio kept every vertex of M1 in it.
+    if (doc.contains("parameters") && params.contains("innerDistanceWeight") &&
+        !params.contains("innerDistanceRatio")) {
+        settings.push_back({"innerDistanceRatio", "--inner-distance-ratio", "1"});
     }
     // ... and one before the second path (no secondPath) ran one path.
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&

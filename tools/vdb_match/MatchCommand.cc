@@ -112,6 +112,7 @@ struct MatchCliOptions
     StillAnchorOptions anchorOptions;          ///< --anchor-radius, --anchor-tolerance
     std::optional<double> innerDistanceWeight; ///< --inner-distance-weight (default per dimension)
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
+    double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
     int innerDistanceLevels = 0;    ///< --inner-distance-levels (0: every level)
     std::optional<double> isoValue; ///< --iso-value: densities converted at this value
@@ -151,8 +152,12 @@ innerDistanceStartLine(const InnerDistanceSummary& f)
     if (!f.used) return "inner distance: not used: " + f.reason;
     return "inner distance: F from each paired extremity on the lattice of level " +
            std::to_string(f.level) + " (" + fixed("%.1f", f.seconds) + " s), over " +
-           std::to_string(f.points) + " vertices of M1, weight " + fixed("%.4g", f.weight) +
-           ", tolerance " + fixed("%.3g", f.tolerance);
+           std::to_string(f.points) + " vertices of M1" +
+           (f.ratio > 1 ? " (" + fixed("%.0f", 100 * f.share) +
+                              "% of it: those whose second-nearest extremity is at least " +
+                              fixed("%.3g", f.ratio) + "x as far as their nearest)"
+                        : std::string()) +
+           ", weight " + fixed("%.4g", f.weight) + ", tolerance " + fixed("%.3g", f.tolerance);
 }
 
 /// One line on what the inner-distance term did.
@@ -517,6 +522,16 @@ matchOptionTable()
              formatNumber(DEFAULT_INNER_DISTANCE_TOLERANCE) + ")",
          [](O& o, const std::string& v) {
              o.innerDistanceTolerance = parseDouble("--inner-distance-tolerance", v);
+         }},
+        {"--inner-distance-ratio", "X", "Landmarks (an addition to the paper)",
+         "only the points of M1 whose second-nearest extremity is at least X times as far "
+         "inside M1 as their nearest are in the inner-distance term, X >= 1; 1: every point "
+         "(default " +
+             formatNumber(DEFAULT_INNER_DISTANCE_RATIO) + ")",
+         [](O& o, const std::string& v) {
+             o.innerDistanceRatio = parseDouble("--inner-distance-ratio", v);
+             if (!(o.innerDistanceRatio >= 1) || !std::isfinite(o.innerDistanceRatio))
+                 throw UsageError("--inner-distance-ratio must be finite and >= 1, got " + v);
          }},
         {"--inner-distance-level", "L", "Landmarks (an addition to the paper)",
          "level of the lattice on which F is computed, 1.." +
@@ -1019,6 +1034,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorTolerance", opts.anchorOptions.tolerance},
              {"innerDistanceWeight", opts.innerDistanceWeight},
              {"innerDistanceTolerance", opts.innerDistanceTolerance},
+             {"innerDistanceRatio", opts.innerDistanceRatio},
              {"innerDistanceLevel", opts.innerDistanceLevel},
              {"innerDistanceLevels", opts.innerDistanceLevels},
              {"secondPath", opts.secondPath ? "on" : "off"},
@@ -1057,7 +1073,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
         j["innerDistance"] =
             Json{{"used", f.used},           {"reason", f.used ? Json() : Json(f.reason)},
                  {"weight", f.weight},       {"tolerance", f.tolerance},
-                 {"level", f.level},         {"points", f.points},
+                 {"level", f.level},         {"ratio", f.ratio},
+                 {"points", f.points},       {"share", f.share},
                  {"startMean", f.startMean}, {"startBeyond", f.startBeyond},
                  {"mean", f.mean},           {"beyond", f.beyond},
                  {"seconds", f.seconds}};
@@ -1236,6 +1253,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
     if (o.innerDistanceWeight) opts.innerDistanceWeight = *o.innerDistanceWeight;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;
+    opts.innerDistanceRatio = o.innerDistanceRatio;
     opts.innerDistanceLevel = o.innerDistanceLevel;
     opts.innerDistanceLevels = o.innerDistanceLevels;
     if (o.secondPath) opts.secondPath = *o.secondPath;

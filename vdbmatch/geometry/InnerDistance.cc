@@ -259,11 +259,40 @@ innerDistanceFields(const Surface<D>& unitSurface, const std::vector<Vec<D>>& so
     return out;
 }
 
+template <int D>
+int
+ownSource(const std::vector<InnerDistanceField<D>>& fields, const Vec<D>& x, double ratio,
+          Real& value)
+{
+    if (!(ratio >= 1) || !std::isfinite(ratio))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "ownSource: the ratio must be finite and >= 1, got " << ratio);
+    Real best = INF, next = INF;
+    int own = -1;
+    for (std::size_t k = 0; k < fields.size(); ++k) {
+        Real f;
+        if (!fields[k].sample(x, f)) continue;
+        if (f < best) { // the first of equals
+            next = best;
+            best = f;
+            own = int(k);
+        } else if (f < next) {
+            next = f;
+        }
+    }
+    value = best;
+    if (own < 0 || next < Real(ratio) * best) return -1;
+    return own;
+}
+
 template struct InnerDistanceField<2>;
 template struct InnerDistanceField<3>;
 template std::vector<InnerDistanceField<2>>
 innerDistanceFields<2>(const Surface<2>&, const std::vector<Vec<2>>&, int, bool);
 template std::vector<InnerDistanceField<3>>
 innerDistanceFields<3>(const Surface<3>&, const std::vector<Vec<3>>&, int, bool);
+
+template int ownSource<2>(const std::vector<InnerDistanceField<2>>&, const Vec<2>&, double, Real&);
+template int ownSource<3>(const std::vector<InnerDistanceField<3>>&, const Vec<3>&, double, Real&);
 
 } // namespace vdbmatch

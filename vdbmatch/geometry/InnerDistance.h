@@ -62,11 +62,26 @@ std::vector<InnerDistanceField<D>> innerDistanceFields(const Surface<D>& unitSur
                                                        const std::vector<Vec<D>>& sources,
                                                        int level, bool threaded = true);
 
+/// A point's own source: the index of the field least at @a x, with that least value in
+/// @a value, or -1 when another field is less than @a ratio times that value there. A point
+/// about as near to two extremities (the body between two limbs, a hand hanging by the hip)
+/// has paths from both crossing a joint, which an articulation turns; a point on a limb, near
+/// its end, has one extremity clearly its own (MatchOptions::innerDistanceRatio).
+/// Empty fields are skipped; -1 when every field is empty.
+/// @throw openvdb::ValueError if @a ratio is not finite or below 1
+template <int D>
+int ownSource(const std::vector<InnerDistanceField<D>>& fields, const Vec<D>& x, double ratio,
+              Real& value);
+
 extern template struct InnerDistanceField<2>;
 extern template struct InnerDistanceField<3>;
 extern template std::vector<InnerDistanceField<2>>
 innerDistanceFields<2>(const Surface<2>&, const std::vector<Vec<2>>&, int, bool);
 extern template std::vector<InnerDistanceField<3>>
 innerDistanceFields<3>(const Surface<3>&, const std::vector<Vec<3>>&, int, bool);
+extern template int ownSource<2>(const std::vector<InnerDistanceField<2>>&, const Vec<2>&, double,
+                                 Real&);
+extern template int ownSource<3>(const std::vector<InnerDistanceField<3>>&, const Vec<3>&, double,
+                                 Real&);
 
 } // namespace vdbmatch
