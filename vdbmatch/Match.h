@@ -367,8 +367,9 @@ struct AutoLandmarkSummary
     double seconds = 0;
 };
 
-/// What MatchOptions::innerDistanceWeight did: |F2(phi(x)) - F1(x)| over the vertices x of M1,
-/// weighted by their shares of M1's measure (Omega units).
+/// What MatchOptions::innerDistanceWeight did: |F2(phi(x)) - F1(x)| over the vertices x of M1
+/// in the term (MatchOptions::innerDistanceRatio), weighted by their shares of M1's measure
+/// (Omega units).
 struct InnerDistanceSummary
 {
     bool requested = false; ///< innerDistanceWeight > 0
