@@ -230,8 +230,8 @@ MatchOptions::validate(int dim) const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: innerDistanceLevel is at most "
                           << MAX_INNER_DISTANCE_LEVEL_3D << " in 3D (got " << innerDistanceLevel
-                          << "; each extremity's field takes 14 bytes per node while it is "
-                             "computed, (2^level + 1)^3 nodes: 240 MB at level 8)");
+                          << "; each extremity's field takes 22 bytes per node while it is "
+                             "computed, (2^level + 1)^3 nodes: 370 MB at level 8)");
     }
 }
 

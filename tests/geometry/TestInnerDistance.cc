@@ -2,10 +2,11 @@
 /// @brief F, the inner distance from given points (geometry/InnerDistance.h): the distance from
 ///        the centre of a disc and a ball in every direction (the eikonal solver's error does
 ///        not depend on the direction, unlike an 8-neighbour graph's 8% along 22.5 degrees), the
-///        path round the slot of a U rather than across it, a turn of the shape and its sources
-///        turning F with them, a finite 1-Lipschitz continuation outside, the interpolant's
-///        gradient, thread-count independence, bad input, and a point's own source (the nearer
-///        end of a bar, none in its middle).
+///        path round the slot of a U rather than across it (outside too, next to the far
+///        prong), a turn of the shape and its sources turning F with them, a finite
+///        continuation outside (1-Lipschitz outside a disc), the interpolant's gradient,
+///        thread-count independence, bad input, and a point's own source (the nearer end of a
+///        bar, none in its middle).
 
 #include "support/TestSurfaces.h"
 
@@ -102,12 +103,21 @@ TEST(InnerDistance, RunsRoundTheSlotOfAU)
     EXPECT_LT(atB, 1.2);
     // The straight way across the slot is 0.2.
     EXPECT_GT(atB, 4 * (tipB - tipA).norm());
-    // Outside, in the slot, F is continued from the nearer prong, min_b F(b) + |x - b| over
-    // its boundary: there the straight distance to the source, which the prong sees.
+    // Outside, F is continued from the nearer side: in the slot next to prong A, F of A's face
+    // plus the distance to it (the straight distance from the tip to the face, inside A)...
     Real inSlot;
-    const Vec<2> x(0.35, 0.7);
+    const Vec<2> x(0.31, 0.7), face(0.3, 0.7);
     ASSERT_TRUE(f.sample(x, inSlot));
-    EXPECT_NEAR(inSlot, (x - tipA).norm(), 3 * f.h);
+    EXPECT_NEAR(inSlot, (face - tipA).norm() + 0.01, 3 * f.h);
+    // ... and on prong B's face, and just outside it in the slot, the path round the U, not
+    // the 0.16 straight across the slot from A's tip, which a march of F itself outside would
+    // bring there (and then into the interpolant at the face's points).
+    for (const Vec<2>& y : {Vec<2>(0.4, 0.7), Vec<2>(0.397, 0.7), Vec<2>(0.39, 0.7)}) {
+        Real v;
+        ASSERT_TRUE(f.sample(y, v));
+        EXPECT_GT(v, 0.8) << y.transpose();
+        EXPECT_GT(v, 4 * (y - tipA).norm()) << y.transpose();
+    }
 }
 
 TEST(InnerDistance, TurnsWithTheShapeAndItsSources)

@@ -75,14 +75,15 @@ public:
     }
 
     /// Accepts nodes in increasing value (ties: the lower index) until the queue is empty,
-    /// updating their admitted neighbours.
-    template <typename Allowed> void run(Allowed&& allowed)
+    /// calling @a accepted on each and updating its admitted neighbours.
+    template <typename Allowed, typename Accepted> void run(Allowed&& allowed, Accepted&& accepted)
     {
         while (!mQueue.empty()) {
             const auto [d, i] = mQueue.top();
             mQueue.pop();
             if (mState[std::size_t(i)] == DONE || d > mValues[std::size_t(i)]) continue;
             mState[std::size_t(i)] = DONE;
+            accepted(i);
             const std::array<int, D> c = mIndex.coords(i);
             for (int a = 0; a < D; ++a) {
                 for (int sign = -1; sign <= 1; sign += 2) {
@@ -209,16 +210,32 @@ marchFrom(const Vec<D>& p, const std::vector<uint8_t>& inside, const DenseIndex<
         out.sourceNodes = 1;
     }
     // 1. Inside, from the source.
-    march.run([&](int64_t j) { return inside[std::size_t(j)] != 0; });
+    march.run([&](int64_t j) { return inside[std::size_t(j)] != 0; }, [](int64_t) {});
     for (int64_t i = 0; i < index.size; ++i)
         out.reachedInside += inside[std::size_t(i)] && state[std::size_t(i)] == DONE;
-    // 2. Everywhere else, from the accepted nodes (which keep their values).
+    // 2. Everywhere else, in increasing distance u from the accepted nodes (a march of u of its
+    //    own): each node takes the upwind value of F from its neighbours already set, so that
+    //    F next to the surface comes from its own side, never across a gap of the outside
+    //    (between a hanging arm and the body, the slot of a U), where a march of F itself would
+    //    bring the far side's smaller values.
+    std::vector<Real> u(std::size_t(index.size), INF);
+    std::vector<uint8_t> uState(std::size_t(index.size), FAR);
+    FastMarch<D> outside(index, out.h, u, uState);
     for (int64_t i = 0; i < index.size; ++i) {
-        if (state[std::size_t(i)] == DONE) continue;
-        const Real t = march.update(i);
-        if (t < INF) march.offer(i, t);
+        if (state[std::size_t(i)] != DONE) continue;
+        u[std::size_t(i)] = 0;
+        uState[std::size_t(i)] = DONE;
     }
-    march.run([](int64_t) { return true; });
+    for (int64_t i = 0; i < index.size; ++i) {
+        if (uState[std::size_t(i)] == DONE) continue;
+        const Real t = outside.update(i);
+        if (t < INF) outside.offer(i, t);
+    }
+    outside.run([](int64_t) { return true; },
+                [&](int64_t i) {
+                    values[std::size_t(i)] = march.update(i);
+                    state[std::size_t(i)] = DONE;
+                });
     out.values.assign(values.begin(), values.end());
     return out;
 }

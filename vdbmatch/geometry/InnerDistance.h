@@ -15,9 +15,14 @@
 ///    method (upwind quadratic update over the 2D axis neighbours): unlike the graph distance
 ///    of Extremities.h (8% too long along 22.5 degrees on the 8-neighbour grid), its error does
 ///    not depend much on the direction of a limb, so two poses of one limb get the same F;
-/// 3. outside, F_k is continued by the same march from the inside values (the inside keeps its
-///    own), so F_k is defined, finite and 1-Lipschitz up to O(h) on the whole box, where phi(x)
-///    of a point near M1 may land.
+/// 3. outside, F_k is continued from the inside values (the inside keeps its own) in increasing
+///    distance u from the inside, each node taking the upwind eikonal value of F from its
+///    neighbours already set: F_k is defined and finite on the whole box, where phi(x) of a
+///    point near M1 may land, and next to the surface it comes from the surface's own side.
+///    A march of F itself would carry the smaller values of the far side of a gap of the
+///    outside (a hand hanging beside the hip, the slot of a U) to the nodes next to the near
+///    side, and from them into the interpolant at its surface points; continued by u, F jumps
+///    where the two sides meet, in the middle of the gap, instead.
 /// Nodes are accepted one at a time in increasing F (ties by index), one source after the
 /// other or in parallel, so the result does not depend on the thread count. Values are stored
 /// as floats (the interpolant of the stored values is what the term differentiates).
