@@ -494,18 +494,20 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         return out;
     }
     out.used = true;
-    // At phi = Id: how far F changes between the shapes at the same place.
-    Real sum = 0, beyond = 0;
+    // At phi = Id: how far F changes between the shapes at the same place (means over the
+    // points in the term, as InnerDistanceTerm::residual()).
+    Real sum = 0, beyond = 0, weights = 0;
     for (std::size_t i = 0; i < samples.points.size(); ++i) {
         Real f;
         samples.targets[samples.fields[i]]->sample(samples.points[i], f);
         const Real r = std::abs(f - samples.values[i]);
-        const Real w = samples.weights[i] / Real(opts.innerDistanceWeight);
+        const Real w = samples.weights[i];
         sum += w * r;
+        weights += w;
         if (r > samples.tolerance) beyond += w;
     }
-    out.startMean = sum / (kept / total);
-    out.startBeyond = beyond / (kept / total);
+    out.startMean = sum / weights;
+    out.startBeyond = beyond / weights;
     out.seconds = secondsSince(start);
     return out;
 }

@@ -23,8 +23,9 @@
 ///    outside (a hand hanging beside the hip, the slot of a U) to the nodes next to the near
 ///    side, and from them into the interpolant at its surface points; continued by u, F jumps
 ///    where the two sides meet, in the middle of the gap, instead.
-/// Nodes are accepted one at a time in increasing F (ties by index), one source after the
-/// other or in parallel, so the result does not depend on the thread count. Values are stored
+/// Nodes are accepted one at a time in increasing F inside and increasing u outside (ties by
+/// index), one source after the other or in parallel, so the result does not depend on the
+/// thread count. Values are stored
 /// as floats (the interpolant of the stored values is what the term differentiates).
 #pragma once
 
