@@ -20,9 +20,9 @@
 #
 # Usage: bench/bench_accuracy.sh [VDB_MATCH] [--pairs a,b,...] [--levels3d 4..7] [--levels2d 4..9]
 #            [--energies symmetric,directional] [--out DIR] [--extra "ARGS"] [--landmarks]
-#            [--resampled]
+#            [--resampled | --scan]
 #   VDB_MATCH   default build/tools/vdb_match/vdb_match
-#   --pairs     names, or a set: all (default; the sixteen pairs of make_pairs.py --list:
+#   --pairs     names, or a set: all (default; the seventeen pairs of make_pairs.py --list:
 #               a creature, an animal and a figure, near-isometric, large-motion and stretch
 #               pairs) or speed (the eight creature and figure pairs that the speed issue's
 #               figures in docs/performance.md use: make_pairs.py --list speed)
@@ -37,6 +37,8 @@
 #   --resampled match against the target sampled independently of the source (make_pairs.py
 #               target_resampled.*: re-meshed from its level set in 3D, resampled by arc length
 #               in 2D); the reverse error then carries g(v) through psi with `vdb_match apply`
+#   --scan      as --resampled, against that target with a scanner's noise (make_pairs.py
+#               target_scan.*: Gaussian, std 0.2% of the source's box diagonal, per vertex)
 # Exit status: 0, or 1 with a message if generation, a match, consistency or scoring fails.
 set -euo pipefail
 
@@ -52,10 +54,12 @@ OUT=
 EXTRA=
 LANDMARKS=0
 RESAMPLED=0
+TARGET_NAME=target_resampled
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
     --resampled) RESAMPLED=1; shift ;;
+    --scan) RESAMPLED=1; TARGET_NAME=target_scan; shift ;;
     --landmarks) LANDMARKS=1; shift ;;
     --pairs|--levels3d|--levels2d|--energies|--out|--extra)
       [ $# -ge 2 ] || die "$1 needs a value"
@@ -104,7 +108,7 @@ output_dir accuracy
 
 echo "machine: $(nproc) cores, $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ //'), load $(cut -d' ' -f1-3 /proc/loadavg)"
 echo "vdb_match: $VDB_MATCH ($("$VDB_MATCH" --version 2>&1 | head -n1))"
-echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'$([ $LANDMARKS = 0 ] || echo '; landmarks')$([ $RESAMPLED = 0 ] || echo '; resampled targets')"
+echo "options: pairs $PAIRS; levels 3D $LEVELS3D, 2D $LEVELS2D; energies $ENERGIES; extra '${EXTRA}'$([ $LANDMARKS = 0 ] || echo '; landmarks')$([ $RESAMPLED = 0 ] || echo "; targets $TARGET_NAME")"
 echo "output: $OUT$([ $KEEP = 1 ] || echo ' (temporary)')"
 
 # --- pairs -----------------------------------------------------------------------------------
@@ -140,7 +144,7 @@ for energy in "${ENERGY_LIST[@]}"; do
     marks=()
     [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_source.csv" "$pd/landmarks_target.csv")
     target=$pd/target.$ext
-    [ $RESAMPLED = 0 ] || target=$pd/target_resampled.$ext
+    [ $RESAMPLED = 0 ] || target=$pd/$TARGET_NAME.$ext
     run_match "$pd/source.$ext" "$target" "$rd/forward" "$levels" "$energy" "${marks[@]}"; fwall=$WALL
     [ $LANDMARKS = 0 ] || marks=("$pd/landmarks_target.csv" "$pd/landmarks_source.csv")
     run_match "$target" "$pd/source.$ext" "$rd/reverse" "$levels" "$energy" "${marks[@]}"; rwall=$WALL

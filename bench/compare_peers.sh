@@ -24,13 +24,15 @@
 # 0 even when it cannot write its result; the score step fails on the missing file instead.
 #
 # Usage: bench/compare_peers.sh [--pairs a,b,...] [--bcpd PATH] [--amm PATH] [--syn PATH]
-#                               [--elastix PATH] [--out DIR]
+#                               [--elastix PATH] [--out DIR] [--scan]
 #   --pairs  names, or a set: all (default; make_pairs.py --list) or speed
 #   --bcpd   the bcpd binary (built with its makefile; needs OpenBLAS/LAPACK)
 #   --amm    the AMM_NRR binary (CMake; needs OpenMesh: Debian libopenmesh-dev); 3D only
 #   --syn    ANTs' antsRegistration binary; antsApplyTransformsToPoints must be next to it
 #   --elastix the elastix binary (Debian: /usr/bin/elastix); transformix must be next to it
 #   --out    keep pairs and outputs in DIR (pairs are reused as bench_accuracy.sh does)
+#   --scan   map onto the target with a scanner's noise (make_pairs.py target_scan.*, as
+#            bench_accuracy.sh --scan) instead of target_resampled.*
 #
 # Each peer maps the source to the target sampled independently of it (make_pairs.py
 # target_resampled.*: re-meshed from its level set in 3D, resampled by arc length in 2D), so it
@@ -73,9 +75,11 @@ AMM=
 SYN=
 ELASTIX=
 OUT=
+TARGET_NAME=target_resampled
 while [ $# -gt 0 ]; do
   case "$1" in
     -h|--help) usage; exit 0 ;;
+    --scan) TARGET_NAME=target_scan; shift ;;
     --pairs|--bcpd|--amm|--syn|--elastix|--out)
       [ $# -ge 2 ] || die "$1 needs a value"
       case "$1" in
@@ -252,8 +256,10 @@ PY
 sdf_images() {
   local level=7
   [ "$2" = 3 ] || level=9
-  [ -f "$3/sdf/source_points.txt" ] && [ "$3/sdf/placement.json" -nt "$1/pair.json" ] && return 0
-  "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$1" --level "$level" --out "$3/sdf"
+  [ -f "$3/sdf/source_points.txt" ] && [ "$3/sdf/placement.json" -nt "$1/pair.json" ] \
+      && [ "$(cat "$3/sdf/target_name" 2>/dev/null)" = "$TARGET_NAME" ] && return 0
+  "$PYTHON" "$ROOT/bench/accuracy/sdf_images.py" --pair "$1" --level "$level" --out "$3/sdf" \
+      --target "$TARGET_NAME" && echo "$TARGET_NAME" >"$3/sdf/target_name"
 }
 
 # image_peer NAME RUN PREFIX: an image peer on the current pair (the loop's p, pd, dim, rd and
@@ -276,7 +282,7 @@ for p in "${PAIR_LIST[@]}"; do
   pd=$OUT/pairs/$p
   dim=$("$PYTHON" -c 'import json,sys; print(json.load(open(sys.argv[1]))["dimension"])' "$pd/pair.json")
   if [ "$dim" = 3 ]; then ext=obj; else ext=polyline; fi
-  target=$pd/target_resampled.$ext
+  target=$pd/$TARGET_NAME.$ext
   rd=$OUT/runs/$p
   mkdir -p "$rd"
   if [ -n "$BCPD" ]; then

@@ -23,7 +23,8 @@ ensure_pairs() {
   for p in "$@"; do
     if [ ! -f "$out/pairs/$p/pair.json" ] || [ "$MAKE_PAIRS" -nt "$out/pairs/$p/pair.json" ] \
         || [ ! -f "$out/pairs/$p/landmarks_source.csv" ] \
-        || ! ls "$out/pairs/$p"/target_resampled.* >/dev/null 2>&1; then
+        || ! ls "$out/pairs/$p"/target_resampled.* >/dev/null 2>&1 \
+        || ! ls "$out/pairs/$p"/target_scan.* >/dev/null 2>&1; then
       missing+=("$p")
     fi
   done

@@ -26,8 +26,10 @@ Maps g (see PAIRS; pair.json "kind" says near-isometric, large motion or stretch
   weight along the limb (logistic in the distance along the limb, times a lateral window, or in
   3D for the animal a cylinder about the limb: radial_limb_rotation); the weight moves with the
   rotation, so the limb beyond the ramp turns rigidly ("skeleton-driven smooth flow"). Creature:
-  three arms by 22-32 deg; animal: the head turned 30 deg, the tail swung 40 deg; figure: an
-  arm raised 30 deg and a forearm turned 30 deg.
+  three arms by 22-32 deg; animal: the head turned 30 deg, the tail swung 40 deg, and the head
+  turned 22 deg with the spine bent 16 deg sideways (every extremity moves: a whole-body pose
+  change, as between two scans of an animal); figure: an arm raised 30 deg and a forearm
+  turned 30 deg.
 - large articulated motion, the same flows further: the creature's arm raised 100 deg, the
   animal's front leg swung 90 deg forward, the figure's arms raised 60 and 90 deg, its legs
   spread 25 deg, a frontal squat (thighs out 22 deg, shins back in 40 deg), a star jump (arms
@@ -46,6 +48,9 @@ Output: one directory per pair, holding
   target_resampled.obj / .polyline: the target sampled independently of the source's vertices
              (3D: re-meshed from its level set at the mean edge length; 2D: resampled by arc
              length with 7% fewer points, half a spacing off), for bench_accuracy.sh --resampled;
+  target_scan.obj / .polyline: target_resampled with Gaussian noise of std 0.2% of the
+             source's box diagonal on every vertex (a scanner's error; same faces), for
+             bench_accuracy.sh --scan and compare_peers.sh --scan;
   landmarks_source.csv, landmarks_target.csv: 5 extremities of the source (farthest-point
              sampling from the vertex farthest from the centroid) and their images g(v), for
              vdb_match --landmarks (bench_accuracy.sh --landmarks);
@@ -59,7 +64,7 @@ Usage (system python, which has numpy and pyopenvdb):
     /usr/bin/python3 bench/accuracy/make_pairs.py OUTDIR [--only NAME[,NAME...]]
     /usr/bin/python3 bench/accuracy/make_pairs.py --list [all|speed]
 --list prints the pair names, all of them or a named set (SETS: "speed", the eight pairs of
-the speed issue's accuracy benchmark). Deterministic; the sixteen pairs take about 2 minutes
+the speed issue's accuracy benchmark). Deterministic; the seventeen pairs take about 2 minutes
 (2 loaded cores), the 3D ones most of it.
 """
 
@@ -68,6 +73,7 @@ import math
 import os
 import sys
 import time
+import zlib
 
 import numpy as np
 
@@ -78,6 +84,7 @@ import make_example_assets as mea  # noqa: E402  (shapes, round cones, polyline 
 
 FLOW_STEPS = 24             # RK4 steps per flow
 DECIMALS = 7                # written coordinates
+SCAN_NOISE = 0.002          # target_scan.*: noise std, fraction of the source box diagonal
 CREATURE_VOXEL = 0.010      # meshing grid of the 3D creature (world units; ~1.9 across)
 FIGURE_POINTS = 1500        # points of the 2D figure (perimeter ~8.5, ~1.9 tall)
 JACOBIAN_STEP = 1e-4        # central differences
@@ -471,6 +478,22 @@ def animal_torso_twist():
     return lambda x: rk4_flow(x, velocity)
 
 
+def animal_body_bend():
+    # A whole-body pose change, as a scanned animal's between two sessions: the head turns 22 deg
+    # sideways on its neck (as animal_head_turn), then the spine bends 16 deg sideways about the
+    # vertical, the angle growing smoothly from -8 deg behind to +8 deg in front; legs, neck,
+    # head and tail follow the part of the body they hang from. Every extremity moves.
+    head = radial_limb_rotation(ANIMAL_NECK, (0.22, 0.0, 0.32), 22.0, start=0.10, ramp=0.04,
+                                radius=0.45, axis=UP)
+    bend = math.radians(16.0)
+
+    def velocity(x, t):
+        w = bend * (logistic(x[:, 0] / 0.25) - 0.5)
+        return w[:, None] * np.cross(UP, x)
+
+    return compose(head, lambda x: rk4_flow(x, velocity))
+
+
 def animal_leg_swing():
     # Large articulated motion: the front right leg swung 90 deg forward at the shoulder, from
     # standing to horizontal (about -y through the shoulder). The weight is flat across the leg
@@ -706,6 +729,10 @@ PAIRS = {
     "animal_torso_twist": (3, "animal", animal_torso_twist,
                            "animal: the torso twisted about its long axis, -11 deg at the hips "
                            "to +11 deg at the shoulders, legs, neck and tail following"),
+    "animal_body_bend": (3, "animal", animal_body_bend,
+                         "animal: the head turned 22 deg sideways on its neck, then the spine "
+                         "bent 16 deg sideways (-8 deg at the hips to +8 deg at the shoulders), "
+                         "legs, neck, head and tail following"),
     "animal_leg_swing": (3, "animal", animal_leg_swing,
                          "animal: the front right leg swung 90 deg forward at the shoulder, "
                          "from standing to horizontal (large articulated motion)"),
@@ -807,6 +834,16 @@ def resampled_target(target, tris, edge):
     return np.asarray(points, dtype=float), faces
 
 
+def scan_target(resampled, diagonal, name):
+    """The resampled target as a scanner would return it: independent Gaussian noise of std
+    SCAN_NOISE x the source's box diagonal on every coordinate of every vertex (0.2%: about 4 mm
+    on a 2 m figure, the order of a consumer depth camera's error), seeded by the pair's name
+    so that every run of the generator writes the same file; rounded to DECIMALS."""
+    rng = np.random.default_rng(zlib.crc32(name.encode()))
+    noisy = resampled + rng.normal(0.0, SCAN_NOISE * diagonal, resampled.shape)
+    return np.round(noisy, DECIMALS)
+
+
 def landmark_indices(points, count=LANDMARKS):
     """Farthest-point sampling from the vertex farthest from the centroid: the extremities
     (limb tips, head, feet), deterministic."""
@@ -869,6 +906,15 @@ def make_pair(name, out_dir, shapes):
         write_polyline(os.path.join(d, "target_resampled.polyline"),
                        np.round(resampled, DECIMALS), name + " target, resampled by arc length")
     info["resampledTargetVertices"] = int(len(resampled))
+    # The same with a scanner's noise on every vertex (bench_accuracy.sh --scan).
+    scan = scan_target(resampled, diag, name)
+    if dim == 3:
+        write_obj(os.path.join(d, "target_scan.obj"), scan, rtris,
+                  name + " target, re-meshed, noise %.3g of the diagonal" % SCAN_NOISE)
+    else:
+        write_polyline(os.path.join(d, "target_scan.polyline"), scan,
+                       name + " target, resampled, noise %.3g of the diagonal" % SCAN_NOISE)
+    info["scanNoiseWorld"] = SCAN_NOISE * diag
     # Landmarks for vdb_match --landmarks: extremities of the source and their true images.
     marks = landmark_indices(points)
     write_landmarks(os.path.join(d, "landmarks_source.csv"), points[marks])

@@ -2,9 +2,10 @@
 """Signed-distance images of a pair's two shapes, for the image-registration peers
 (bench/compare_peers.sh --syn and --elastix, bench/compare_elastix.sh).
 
-    sdf_images.py --pair PAIRDIR --level L --out DIR [--band X]
+    sdf_images.py --pair PAIRDIR --level L --out DIR [--band X] [--target NAME]
 
-Both shapes (source.obj / source.polyline and target_resampled.*) are placed in the unit box as
+Both shapes (source.obj / source.polyline and target_resampled.*, or NAME.* with --target) are
+placed in the unit box as
 vdb_match places them (margin 0.2: the union of their vertex boxes, largest side scaled to 0.6
 and centred), and sampled on the nodes of level L: (2^L + 1)^d pixels of size h = 2^-L covering
 [0, 1]^d, the resolution of vdb_match's level L. Distances are in unit-box lengths, negative
@@ -165,13 +166,16 @@ def main():
     ap.add_argument("--level", type=int, required=True)
     ap.add_argument("--out", required=True)
     ap.add_argument("--band", type=float, default=0.3)
+    ap.add_argument("--target", default="target_resampled",
+                    help="the target file's name in the pair, without extension (default "
+                         "target_resampled; target_scan for compare_peers.sh --scan)")
     args = ap.parse_args()
     if not 3 <= args.level <= 10:
         sys.exit("sdf_images.py: --level must be in 3..10")
     dim = json.load(open(os.path.join(args.pair, "pair.json")))["dimension"]
     ext = "obj" if dim == 3 else "polyline"
     src_file = os.path.join(args.pair, "source." + ext)
-    tgt_file = os.path.join(args.pair, "target_resampled." + ext)
+    tgt_file = os.path.join(args.pair, args.target + "." + ext)
     src_pts, tgt_pts = read_points(src_file, dim), read_points(tgt_file, dim)
     origin, scale = placement(src_pts, tgt_pts)
     n, h = 2 ** args.level + 1, 2.0 ** -args.level

@@ -55,3 +55,35 @@ def test_the_outline_keeps_its_length_on_the_leg_pairs():
         w = mp.PAIRS[name][2]()(v)
         moved = np.linalg.norm(np.roll(w, -1, axis=0) - w, axis=1).sum()
         assert abs(moved / length - 1) < 0.04, (name, moved / length)
+
+
+def test_the_scan_target_is_the_resampled_target_with_seeded_noise_of_the_stated_size():
+    # target_scan.* (bench_accuracy.sh --scan): independent Gaussian noise of std SCAN_NOISE x
+    # the source's diagonal on every coordinate, the same on every run of the generator and
+    # different from one pair to the next.
+    rng = np.random.default_rng(0)
+    resampled = rng.uniform(-1.0, 1.0, (20000, 3))
+    diagonal = 2.5
+    a = mp.scan_target(resampled, diagonal, "animal_body_bend")
+    again = mp.scan_target(resampled, diagonal, "animal_body_bend")
+    other = mp.scan_target(resampled, diagonal, "animal_head_turn")
+    assert np.array_equal(a, again)
+    assert not np.allclose(a, other)
+    noise = a - resampled
+    sigma = mp.SCAN_NOISE * diagonal
+    assert abs(noise.std() / sigma - 1.0) < 0.02, noise.std() / sigma
+    assert abs(noise.mean()) < 0.05 * sigma
+    # Rounded as every written coordinate is.
+    assert np.array_equal(a, np.round(a, mp.DECIMALS))
+
+
+def test_the_body_bend_moves_every_extremity():
+    # animal_body_bend: a whole-body pose change (head 22 deg, spine 16 deg): the snout, the
+    # tail's end and the four feet all move (so the automatic anchors' "some extremity stays"
+    # is a matter of how far, not of none moving).
+    v = np.array([p for a, _, b, _ in mp.animal_parts() for p in (a, b)])
+    g = mp.PAIRS["animal_body_bend"][2]()
+    moved = np.linalg.norm(g(v) - v, axis=1)
+    ends = [np.argmax(v[:, 0]), np.argmin(v[:, 0])] + list(np.where(v[:, 2] < -0.7)[0])
+    assert len(ends) == 6
+    assert moved[ends].min() > 0.03, moved[ends]

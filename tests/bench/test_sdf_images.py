@@ -13,9 +13,9 @@ import pytest
 SCRIPT = os.path.join(os.path.dirname(__file__), "..", "..", "bench", "accuracy", "sdf_images.py")
 
 
-def run(pair, out, level):
+def run(pair, out, level, *extra):
     subprocess.run([sys.executable, SCRIPT, "--pair", str(pair), "--level", str(level), "--out",
-                    str(out)], check=True)
+                    str(out), *extra], check=True)
 
 
 def read_mhd(path):
@@ -66,6 +66,27 @@ def test_2d_distances_sign_and_placement(tmp_path):
     unit = np.loadtxt(tmp_path / "out" / "source_points.csv", delimiter=",", skiprows=1)
     assert unit.shape == (n, 5)  # x, y, t, label, comment
     assert unit[:, :2] == pytest.approx(scale * (src - place["origin"]), abs=1e-9)
+
+
+def test_target_option_reads_that_target(tmp_path):
+    # --target target_scan (compare_peers.sh --scan): the target image is of that file, placed
+    # with it: a circle of radius 0.25 instead of target_resampled's 0.3.
+    pair = tmp_path / "pair"
+    pair.mkdir()
+    (pair / "pair.json").write_text(json.dumps({"dimension": 2}))
+    write_circle(pair / "source.polyline", (1.0, 2.0), 0.4, 400)
+    write_circle(pair / "target_resampled.polyline", (1.2, 2.0), 0.3, 300)
+    write_circle(pair / "target_scan.polyline", (1.2, 2.0), 0.25, 300)
+    for name, radius in (("target_resampled", 0.3), ("target_scan", 0.25)):
+        out = tmp_path / name
+        run(pair, out, 6, "--target", name)
+        place = json.load(open(out / "placement.json"))
+        a, h = read_mhd(str(out / "target_sdf.mhd"))
+        centre = place["scale"] * (np.array([1.2, 2.0]) - np.array(place["origin"])) / h
+        i, j = int(round(centre[0])), int(round(centre[1]))
+        # At the node nearest the centre, the distance is minus the radius (unit-box lengths).
+        off = np.linalg.norm((np.array([i, j]) - centre) * h)
+        assert a[i, j] == pytest.approx(-place["scale"] * radius + off, abs=2e-3)
 
 
 def test_3d_cube_distances(tmp_path):
