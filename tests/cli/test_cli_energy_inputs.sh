@@ -21,8 +21,9 @@ source "$(dirname "$0")/common.sh"
 
 # same_energy NAME LEVEL SOURCE TARGET DIM [OPTIONS...]: energy --json total == match --levels L..L
 # initial energy, both with OPTIONS (without automatic landmarks, whose term `energy` does not
-# have, and with the paper's membrane density unless OPTIONS saturate it: match's default
-# saturates it at its first levels, `energy`'s does not). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
+# have, and with the paper's membrane density and distance Hessian unless OPTIONS change them:
+# match's default saturates the membrane at its first levels and smooths the Hessian in 3D,
+# `energy`'s does neither). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
 # runs also check that both commands default to the same c_vol.
 same_energy() {
     local name=$1 level=$2 source=$3 target=$4 dim=$5
@@ -30,7 +31,8 @@ same_energy() {
     count=$((count + 1))
     "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet "$@" >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
         "$VDB_MATCH" "$source" "$target" -o "$SCRATCH/$name" --levels "$level..$level" --max-iterations 0 \
-            --auto-landmarks off --membrane-saturation 0 --quiet --no-inverse --no-jacobian "$@" >/dev/null 2>>"$SCRATCH/err"
+            --auto-landmarks off --membrane-saturation 0 --hessian-smoothing 0 --quiet --no-inverse --no-jacobian \
+            "$@" >/dev/null 2>>"$SCRATCH/err"
     local code=$?
     if [ "$code" -eq 0 ] && "$PYTHON" - "$SCRATCH/$name.json" "$SCRATCH/$name/report.json" "$dim" <<'PY'; then
 import json, sys
@@ -43,7 +45,7 @@ assert e["simplices"] == cells * (2 if dim == 2 else 6), e["simplices"]
 initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
-for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation"):
+for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation", "hessianSmoothing"):
     assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"
@@ -60,6 +62,7 @@ same_energy directional-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --energy directional
 same_energy directional-3d 4 "$SPHERE" "$ELLIPSOID" 3 --energy directional --c-vol 2
 same_energy saturated-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --membrane-saturation 0.01
 same_energy saturated-3d 4 "$SPHERE" "$ELLIPSOID" 3 --membrane-saturation 0.01
+same_energy smoothed-3d 4 "$SPHERE" "$ELLIPSOID" 3 --hessian-smoothing 2
 # The saturation lowers the membrane term only (an addition: s log(1 + W/s) <= W).
 count=$((count + 1))
 if "$VDB_MATCH" energy "$FIGURE_A" "$FIGURE_B" --level 6 --json --quiet >"$SCRATCH/e0.json" &&
