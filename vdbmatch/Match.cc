@@ -132,8 +132,6 @@ MatchOptions::defaults(int dim)
         dim == 2 ? DEFAULT_MATCH_MEMBRANE_SATURATION_2D : DEFAULT_MATCH_MEMBRANE_SATURATION_3D;
     opts.multiscale.membraneSaturationLevels = DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS;
     if (dim == 2) opts.multiscale.metricTauFactor = DEFAULT_MATCH_METRIC_TAU_2D;
-    opts.sampler.fields.hessianSmoothing =
-        dim == 2 ? DEFAULT_MATCH_HESSIAN_SMOOTHING_2D : DEFAULT_MATCH_HESSIAN_SMOOTHING_3D;
     opts.autoLandmarks = true;
     opts.autoAnchors = true;
     opts.innerDistanceWeight =

@@ -162,19 +162,6 @@ constexpr int DEFAULT_MATCH_MEMBRANE_SATURATION_LEVELS = 2;
 /// 0.89, time 0.89. In 3D the same change was a wash (error 1.006, |psi o phi - Id| 0.994) and
 /// costs CG iterations, so 3D keeps 1/2.
 constexpr double DEFAULT_MATCH_METRIC_TAU_2D = 2;
-/// Default ShapeFieldOptions::hessianSmoothing of match() in 3D (--hessian-smoothing): one
-/// binomial [1,2,1]/4 pass over the distance Hessian at every level before the shape operator S
-/// of eq:defSi is formed (--preset paper and 2D: none). Second differences amplify a scanner's
-/// noise on the input mesh by 1/h^2: noise of 0.2% of the shape's diagonal gives curvature
-/// errors of the size of the curvatures themselves at level 7, and the bending term
-/// (eq:EsymBend) then matches noise. Measured on the nine 3D pairs of the correspondence
-/// benchmark (docs/numerics.md "Hessian smoothing"): against targets with that noise
-/// (bench_accuracy.sh --scan) the error falls by a geometric mean of 0.775 (two passes: 0.784);
-/// against the noise-free targets it is 0.989 (two passes: 1.002, the head turn +8%).
-constexpr int DEFAULT_MATCH_HESSIAN_SMOOTHING_3D = 1;
-/// Default ShapeFieldOptions::hessianSmoothing of match() in 2D: none (the 2D benchmark's
-/// outlines are noise-free, and two passes there change single runs by up to 30% either way).
-constexpr int DEFAULT_MATCH_HESSIAN_SMOOTHING_2D = 0;
 /// Default relative residual of the metric's CG solves in match(): the descent direction need not
 /// be exact (12 instead of 31 CG iterations per solve at level 7, same residual and energy).
 constexpr double DEFAULT_MATCH_METRIC_TOLERANCE = 1e-2;

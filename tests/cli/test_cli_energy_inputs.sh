@@ -22,8 +22,7 @@ source "$(dirname "$0")/common.sh"
 # same_energy NAME LEVEL SOURCE TARGET DIM [OPTIONS...]: energy --json total == match --levels L..L
 # initial energy, both with OPTIONS (without automatic landmarks, whose term `energy` does not
 # have, and with the paper's membrane density and distance Hessian unless OPTIONS change them:
-# match's default saturates the membrane at its first levels and smooths the Hessian in 3D,
-# `energy`'s does neither). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
+# match's default saturates the membrane at its first levels, `energy`'s does not). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
 # runs also check that both commands default to the same c_vol.
 same_energy() {
     local name=$1 level=$2 source=$3 target=$4 dim=$5

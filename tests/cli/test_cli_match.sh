@@ -242,8 +242,6 @@ assert paper["membraneSaturation"] == 0, paper
 assert default["membraneSaturation"] == 0.1 and default["membraneSaturationLevels"] == 2, default
 # the descent's metric weight (the paper gives none): sigma^2 / 2 in 3D and in the paper's preset
 assert paper["metricTauFactor"] == 0.5 and default["metricTauFactor"] == 0.5, (paper, default)
-# the distance Hessian: the paper's in its preset, one smoothing pass by default in 3D
-assert paper["hessianSmoothing"] == 0 and default["hessianSmoothing"] == 1, (paper, default)
 PY
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
@@ -262,8 +260,6 @@ reports = [json.load(open(d + "/report.json")) for d in sys.argv[1:]]
 default, paper, given = (r["parameters"] for r in reports)
 assert default["membraneSaturation"] == 0, default
 assert default["metricTauFactor"] == 2 and paper["metricTauFactor"] == 0.5 and given["metricTauFactor"] == 0.5, (default, paper, given)
-# 2D keeps the paper's distance Hessian (the smoothing is the 3D default)
-assert default["hessianSmoothing"] == 0 and paper["hessianSmoothing"] == 0, (default, paper)
 # the metric changes the path, not the energy: the same energy at the identity, another end
 e = [r["levels"][0] for r in reports]
 assert e[0]["initialEnergy"] == e[2]["initialEnergy"], e

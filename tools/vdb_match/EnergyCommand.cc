@@ -5,7 +5,6 @@
 #include "Cli.h"
 #include "CliSupport.h"
 
-#include <vdbmatch/Match.h>
 #include <vdbmatch/energy/Energy.h>
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/FieldSampler.h>
@@ -131,8 +130,7 @@ energyOptionTable()
          }},
         {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
          "[1,2,1]/4 smoothing passes of the distance Hessian, >= 0 (default " +
-             std::to_string(d.hessianSmoothing) + ": the paper's Hessian; match's default is " +
-             std::to_string(DEFAULT_MATCH_HESSIAN_SMOOTHING_3D) + " in 3D)",
+             std::to_string(d.hessianSmoothing) + ")",
          [](O& o, const std::string& v) {
              o.hessianSmoothing = parseInt("--hessian-smoothing", v);
          }},

@@ -77,7 +77,7 @@ struct MatchCliOptions
     std::string preset = "default"; ///< --preset: "default" or "paper" (MatchOptions::paper)
     EnergyKind kind = EnergyKind::Symmetric;
     double margin = DEFAULT_UNIT_BOX_MARGIN;
-    std::optional<int> hessianSmoothing; ///< default per dimension and preset (MatchOptions)
+    int hessianSmoothing = 0;
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
@@ -359,8 +359,7 @@ matchOptionTable()
         {"--preset", "NAME", "Energy (paper tab:parameters)",
          "'default' or 'paper': the paper's experiment, tab:parameters and its levels with none of "
          "our additions that change the result (no surface test, one c_mem at every level, no "
-         "automatic landmarks or anchors, no second path, no Hessian smoothing, no landmarks "
-         "unless given); "
+         "automatic landmarks or anchors, no second path, no landmarks unless given); "
          "options given override it (default: default)",
          [](O& o, const std::string& v) {
              if (v != "default" && v != "paper")
@@ -443,10 +442,8 @@ matchOptionTable()
              "\npaper: tau, eq:defSi",
          [](O& o, const std::string& v) { o.tau = parseDouble("--tau", v); }},
         {"--hessian-smoothing", "N", "Energy (paper tab:parameters)",
-         "[1,2,1]/4 smoothing passes of the distance Hessian at every level, >= 0 (default " +
-             std::to_string(DEFAULT_MATCH_HESSIAN_SMOOTHING_3D) + " in 3D, " +
-             std::to_string(DEFAULT_MATCH_HESSIAN_SMOOTHING_2D) +
-             " in 2D; --preset paper: 0). Against a scanner's noise on the inputs",
+         "[1,2,1]/4 smoothing passes of the distance Hessian at every level, >= 0 (default 0: "
+         "the paper's Hessian). Against a scanner's noise on the inputs (docs/numerics.md)",
          [](O& o, const std::string& v) { o.hessianSmoothing = parseInt("--hessian-smoothing", v); }},
         {"--landmarks", "A.csv B.csv", "Landmarks (an addition to the paper)",
          "corresponding points: row k of A (on the source) should map to row k of B (on the "
@@ -732,8 +729,7 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     checkIsoValueInputs(o.isoValue, o.source, o.target);
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
-    if (o.hessianSmoothing && *o.hessianSmoothing < 0)
-        throw UsageError("--hessian-smoothing must be >= 0");
+    if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
     if (!o.init.empty() && !o.warmStart.empty()) {
         throw UsageError("--init (this pair's earlier result) and --warm-start (another pair's) "
@@ -1230,7 +1226,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.relativeGradientTolerance = o.gradientTolerance;
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;
-    if (o.hessianSmoothing) opts.sampler.fields.hessianSmoothing = *o.hessianSmoothing;
+    opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
     // --landmarks A B: the same number of points in each, in world units of the inputs.
     if (!o.landmarkFiles.empty()) {
         if (o.landmarkFiles.size() != 2)
