@@ -243,6 +243,56 @@ TEST(Match, SphereToEllipsoid3D)
     checkMatch<3>(sphere, ellipsoid, opts);
 }
 
+/// The noise-adaptive Hessian smoothing (MatchOptions::hessianNoiseFactor), on by default: a
+/// noise-free pair runs bitwise as without it; a target with a scanner's noise is smoothed at
+/// the levels where its length reaches half a cell, and only the target.
+TEST(Match, NoiseSmoothingActsOnNoisyShapesOnly)
+{
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
+    MatchOptions opts = MatchOptions::defaults(2);
+    EXPECT_EQ(opts.hessianNoiseFactor, NOISE_SMOOTHING_LENGTH_FACTOR);
+    EXPECT_EQ(MatchOptions::paper(2).hessianNoiseFactor, 0.0);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 7;
+    const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+    const MatchResult<2> smoothed = match<2>(circle, ellipse, placement, opts);
+    MatchOptions off = opts;
+    off.hessianNoiseFactor = 0;
+    const MatchResult<2> plain = match<2>(circle, ellipse, placement, off);
+    for (int s = 0; s < 2; ++s) {
+        EXPECT_GT(smoothed.shapeNoise[s], 0.0);
+        EXPECT_EQ(smoothed.hessianSmoothingLength[s],
+                  NOISE_SMOOTHING_LENGTH_FACTOR * smoothed.shapeNoise[s]);
+        EXPECT_LT(smoothed.hessianSmoothingLength[s], 0.5 * std::ldexp(1.0, -7));
+        EXPECT_EQ(plain.shapeNoise[s], 0.0);
+    }
+    ASSERT_EQ(smoothed.displacement.cols(), plain.displacement.cols());
+    EXPECT_TRUE(smoothed.displacement == plain.displacement);
+
+    // The ellipse with radial noise of 0.4% of its size (a scan of it): its length reaches half
+    // a cell at level 6 or 7, and the result differs from the unsmoothed one.
+    Surface<2> scan = ellipse;
+    std::uint64_t state = 12345;
+    for (Vec<2>& p : scan.points) {
+        double sum = 0; // Irwin-Hall: about N(0, 1)
+        for (int k = 0; k < 12; ++k) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            sum += double(state >> 11) * 0x1.0p-53;
+        }
+        p += 0.02 * (sum - 6.0) * (p - Vec<2>(3.4, -0.8)).normalized();
+    }
+    const MatchResult<2> noisy = match<2>(circle, scan, placement, opts);
+    const MatchResult<2> noisyPlain = match<2>(circle, scan, placement, off);
+    EXPECT_EQ(noisy.shapeNoise[0], smoothed.shapeNoise[0]);
+    EXPECT_GT(noisy.shapeNoise[1], 100 * smoothed.shapeNoise[1]);
+    ShapeFieldOptions fields;
+    fields.hessianSmoothingLength = noisy.hessianSmoothingLength[1];
+    EXPECT_GT(hessianSmoothingPasses(fields, std::ldexp(1.0, -7)), 0);
+    EXPECT_FALSE(noisy.displacement == noisyPlain.displacement);
+    EXPECT_GT(noisy.minJacobian, 0.0);
+    EXPECT_LT(noisy.residual.meanUnit, 0.5 * std::ldexp(1.0, -7));
+}
+
 TEST(Match, HeavierMetricIs2DDefaultAndChangesThePathNotTheEnergy)
 {
     // The descent's H1 metric weight (solver/H1Metric.h; the paper gives none): 2 sigma^2 by

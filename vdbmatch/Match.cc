@@ -137,6 +137,7 @@ MatchOptions::defaults(int dim)
     opts.innerDistanceWeight =
         dim == 2 ? DEFAULT_INNER_DISTANCE_WEIGHT_2D : DEFAULT_INNER_DISTANCE_WEIGHT_3D;
     opts.secondPath = true;
+    opts.hessianNoiseFactor = NOISE_SMOOTHING_LENGTH_FACTOR;
     return opts;
 }
 
@@ -177,6 +178,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: the anchor tolerance and radius must be finite and >= 0, got "
                           << anchorOptions.tolerance << " and " << anchorOptions.radius);
+    }
+    if (!(hessianNoiseFactor >= 0) || !std::isfinite(hessianNoiseFactor)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: hessianNoiseFactor must be finite and >= 0, got "
+                          << hessianNoiseFactor);
     }
     if (!(secondPathShare >= 0 && secondPathShare <= 1)) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -753,6 +759,15 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     LevelSummary pending;
     // Distance tiers shared between levels (the coarse box and the band two levels down).
     ShapeSamplerCache<D> sourceTiers, targetTiers;
+    // Each shape's Hessian smoothed over a length from its own noise (geometry/SurfaceNoise.h).
+    ShapeSamplerOptions sourceSampler = opts.sampler, targetSampler = opts.sampler;
+    if (opts.hessianNoiseFactor > 0) {
+        result.shapeNoise = {surfaceNoise(unitSource), surfaceNoise(unitTarget)};
+        for (int s = 0; s < 2; ++s)
+            result.hessianSmoothingLength[s] = opts.hessianNoiseFactor * result.shapeNoise[s];
+        sourceSampler.fields.hessianSmoothingLength = result.hessianSmoothingLength[0];
+        targetSampler.fields.hessianSmoothingLength = result.hessianSmoothingLength[1];
+    }
 
     const multiscale::ContextLevelBuilder<D> builder =
         [&](const multiscale::LevelContext<D>& context) {
@@ -765,10 +780,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             multiscale::Level<D> level;
             // The two shapes' fields side by side: each scales only ~1.4x on two threads.
             auto buildSource = [&] {
-                level.shape1 = buildShapeSampler<D>(unitSource, l, opts.sampler, sourceTiers);
+                level.shape1 = buildShapeSampler<D>(unitSource, l, sourceSampler, sourceTiers);
             };
             auto buildTarget = [&] {
-                level.shape2 = buildShapeSampler<D>(unitTarget, l, opts.sampler, targetTiers);
+                level.shape2 = buildShapeSampler<D>(unitTarget, l, targetSampler, targetTiers);
             };
             detail::invokeBoth(opts.threaded, buildSource, buildTarget);
             level.surfacePoints = &unitSource.points;

@@ -38,6 +38,7 @@
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/StillAnchors.h>
 #include <vdbmatch/geometry/Surface.h>
+#include <vdbmatch/geometry/SurfaceNoise.h>
 #include <vdbmatch/geometry/UnitBox.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
 #include <vdbmatch/multiscale/MultiscaleDriver.h>
@@ -45,6 +46,7 @@
 #include <openvdb/Exceptions.h>
 #include <openvdb/util/NullInterrupter.h>
 
+#include <array>
 #include <functional>
 #include <memory>
 #include <string>
@@ -297,6 +299,13 @@ struct MatchOptions
     /// default: on the benchmark it changes one pair, whose target it then reaches at a higher
     /// correspondence error.
     bool secondPathTarget = false;
+    /// Noise-adaptive Hessian smoothing, an addition to the paper (docs/numerics.md
+    /// "Noise-adaptive Hessian smoothing"): each shape's Hessian of d is smoothed over
+    /// hessianNoiseFactor times the shape's own vertex noise (geometry/SurfaceNoise.h, Omega
+    /// units), which sets sampler.fields.hessianSmoothingLength per shape: a scan's fine levels
+    /// are smoothed, a noise-free mesh or outline is left bitwise as without. >= 0; 0: off
+    /// (paper()); defaults(): NOISE_SMOOTHING_LENGTH_FACTOR.
+    double hessianNoiseFactor = 0;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -460,6 +469,10 @@ template <int D> struct MatchResult
     AutoLandmarkSummary autoLandmarks;
     InnerDistanceSummary innerDistance;
     SecondPathSummary secondPath;
+    /// surfaceNoise() of the placed source and target (Omega units) and the Hessian smoothing
+    /// length each got (MatchOptions::hessianNoiseFactor); zeros when the factor is 0.
+    std::array<double, 2> shapeNoise{{0.0, 0.0}};
+    std::array<double, 2> hessianSmoothingLength{{0.0, 0.0}};
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 

@@ -70,6 +70,7 @@ def match(
     theta: float | None = None,
     tau: float | None = None,
     hessian_smoothing: int | None = None,
+    noise_smoothing: float | None = None,
     landmarks: tuple[Path | npt.ArrayLike, Path | npt.ArrayLike] | None = None,
     landmark_weight: float | None = None,
     auto_landmarks: str | None = None,
@@ -125,6 +126,7 @@ def energy(
     tau: float | None = None,
     membrane_saturation: float | None = None,
     hessian_smoothing: int | None = None,
+    noise_smoothing: float | None = None,
     threads: int | None = None,
 ) -> dict[str, Any]: ...
 

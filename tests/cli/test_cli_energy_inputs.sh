@@ -21,7 +21,8 @@ source "$(dirname "$0")/common.sh"
 
 # same_energy NAME LEVEL SOURCE TARGET DIM [OPTIONS...]: energy --json total == match --levels L..L
 # initial energy, both with OPTIONS (without automatic landmarks, whose term `energy` does not
-# have, and with the paper's membrane density and distance Hessian unless OPTIONS change them:
+# have, and with the paper's membrane density and distance Hessian unless OPTIONS change them
+# (match's default smooths the Hessian of noisy shapes, energy's does not):
 # match's default saturates the membrane at its first levels, `energy`'s does not). The directional energy of the identity holds c_vol sigma^theta W_vol(1)|Omega|, so its
 # runs also check that both commands default to the same c_vol.
 same_energy() {
@@ -30,7 +31,7 @@ same_energy() {
     count=$((count + 1))
     "$VDB_MATCH" energy "$source" "$target" --level "$level" --json --quiet "$@" >"$SCRATCH/$name.json" 2>"$SCRATCH/err" &&
         "$VDB_MATCH" "$source" "$target" -o "$SCRATCH/$name" --levels "$level..$level" --max-iterations 0 \
-            --auto-landmarks off --membrane-saturation 0 --hessian-smoothing 0 --quiet --no-inverse --no-jacobian \
+            --auto-landmarks off --membrane-saturation 0 --hessian-smoothing 0 --noise-smoothing 0 --quiet --no-inverse --no-jacobian \
             "$@" >/dev/null 2>>"$SCRATCH/err"
     local code=$?
     if [ "$code" -eq 0 ] && "$PYTHON" - "$SCRATCH/$name.json" "$SCRATCH/$name/report.json" "$dim" <<'PY'; then
@@ -44,7 +45,8 @@ assert e["simplices"] == cells * (2 if dim == 2 else 6), e["simplices"]
 initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
-for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation", "hessianSmoothing"):
+for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation", "hessianSmoothing",
+            "noiseSmoothing"):
     assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"
@@ -62,6 +64,45 @@ same_energy directional-3d 4 "$SPHERE" "$ELLIPSOID" 3 --energy directional --c-v
 same_energy saturated-2d 6 "$FIGURE_A" "$FIGURE_B" 2 --membrane-saturation 0.01
 same_energy saturated-3d 4 "$SPHERE" "$ELLIPSOID" 3 --membrane-saturation 0.01
 same_energy smoothed-3d 4 "$SPHERE" "$ELLIPSOID" 3 --hessian-smoothing 2
+# A target with a scanner's noise (0.3% of its size along the normal), smoothed from its noise.
+"$PYTHON" - "$FIGURE_B" "$SCRATCH/figure_b_scan.polyline" <<'PY'
+import math, random, sys
+curves, cur = [], []
+for line in open(sys.argv[1]):
+    line = line.split("#")[0].split()
+    if not line:
+        if cur: curves.append(cur); cur = []
+        continue
+    cur.append((float(line[0]), float(line[1])))
+if cur: curves.append(cur)
+xs = [p[0] for c in curves for p in c]; ys = [p[1] for c in curves for p in c]
+sigma = 0.003 * math.hypot(max(xs) - min(xs), max(ys) - min(ys))
+rng = random.Random(5)
+with open(sys.argv[2], "w") as out:
+    for c in curves:
+        for i, (x, y) in enumerate(c):
+            (ax, ay), (bx, by) = c[i - 1], c[(i + 1) % len(c)]
+            tx, ty = bx - ax, by - ay
+            t = math.hypot(tx, ty) or 1.0
+            e = rng.gauss(0.0, sigma)
+            out.write("%.9g %.9g\n" % (x + e * ty / t, y - e * tx / t))
+        out.write("\n")
+PY
+same_energy noise-smoothed-2d 8 "$FIGURE_A" "$SCRATCH/figure_b_scan.polyline" 2 --noise-smoothing 4
+count=$((count + 1))
+if "$VDB_MATCH" energy "$FIGURE_A" "$SCRATCH/figure_b_scan.polyline" --level 8 --json --quiet >"$SCRATCH/n0.json" &&
+    "$PYTHON" - "$SCRATCH/n0.json" "$SCRATCH/noise-smoothed-2d.json" "$SCRATCH/noise-smoothed-2d/report.json" <<'PY'; then echo "ok   noise-smoothing-acts"; else fail "noise-smoothing-acts"; fi
+import json, sys
+plain, smoothed, report = (json.load(open(f)) for f in sys.argv[1:])
+assert plain["parameters"]["noiseSmoothing"] == 0 and smoothed["parameters"]["noiseSmoothing"] == 4
+# Only the bending term reads the Hessian (eq:defSi); the target's is smoothed, the source's not.
+assert plain["terms"]["bend"] != smoothed["terms"]["bend"], (plain["terms"], smoothed["terms"])
+for k in ("match", "mem", "vol"):
+    assert plain["terms"][k] == smoothed["terms"][k], (k, plain["terms"], smoothed["terms"])
+noise = report["noise"]
+assert noise["target"] > 30 * noise["source"] > 0, noise
+assert noise["smoothingLength"] == [4 * noise["source"], 4 * noise["target"]], noise
+PY
 # The saturation lowers the membrane term only (an addition: s log(1 + W/s) <= W).
 count=$((count + 1))
 if "$VDB_MATCH" energy "$FIGURE_A" "$FIGURE_B" --level 6 --json --quiet >"$SCRATCH/e0.json" &&

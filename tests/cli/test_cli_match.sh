@@ -242,7 +242,20 @@ assert paper["membraneSaturation"] == 0, paper
 assert default["membraneSaturation"] == 0.1 and default["membraneSaturationLevels"] == 2, default
 # the descent's metric weight (the paper gives none): sigma^2 / 2 in 3D and in the paper's preset
 assert paper["metricTauFactor"] == 0.5 and default["metricTauFactor"] == 0.5, (paper, default)
+# the Hessian smoothed from each shape's noise (an addition): off in the paper's preset
+assert paper["noiseSmoothing"] == 0 and default["noiseSmoothing"] > 0, (paper, default)
+reports = [json.load(open(d + "/report.json")) for d in sys.argv[1:]]
+assert "noise" not in reports[0], reports[0].keys()
+noise = reports[2]["noise"]
+assert 0 < noise["source"] < 1e-3 and 0 < noise["target"] < 1e-3, noise
+assert noise["smoothingLength"][1] == default["noiseSmoothing"] * noise["target"], noise
 PY
+check noise-smoothing-negative 1 '' '--noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-smoothing -1 --quiet
+# A report of a version before the noise smoothing reproduces its run without it.
+"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_noise.json"
+check noise-smoothing-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/nold" --config "$SCRATCH/old_noise.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); assert r["parameters"]["noiseSmoothing"] == 0 and "noise" not in r' "$SCRATCH/nold/report.json"; then echo "ok   noise-smoothing-old-report"; else fail "noise-smoothing-old-report"; fi
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <random>
 
 using namespace vdbmatch;
@@ -368,6 +369,11 @@ TEST(ShapeFields, RejectsInvalidInput)
     opts.tau = TAU;
     opts.hessianSmoothing = -1;
     expectThrow(*good, opts);
+    opts.hessianSmoothing = 0;
+    opts.hessianSmoothingLength = -1e-3;
+    expectThrow(*good, opts);
+    opts.hessianSmoothingLength = std::numeric_limits<Real>::quiet_NaN();
+    expectThrow(*good, opts);
 }
 
 ////////////////////////////////////////////////////////////////////////////////
@@ -408,4 +414,45 @@ TEST(ShapeFields, HessianSmoothingReducesCurvatureErrorOnNoisySdf)
     }
     EXPECT_LT(errors[2], 0.25 * errors[0]);
     EXPECT_LT(errors[3], 0.1 * errors[0]);
+}
+
+TEST(ShapeFields, SmoothingLengthSetsThePassesPerVoxelSize)
+{
+    // n passes of [1,2,1]/4 have variance n h^2 / 2: n = round(2 s^2 / h^2), capped.
+    ShapeFieldOptions opts;
+    const double h = 1.0 / 64;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), 0);
+    opts.hessianSmoothingLength = 0.49 * h;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), 0);
+    opts.hessianSmoothingLength = h;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), 2);
+    EXPECT_EQ(hessianSmoothingPasses(opts, 2 * h), 1); // one level coarser: 0.5 rounds to 1
+    opts.hessianSmoothingLength = 2 * h;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), 8);
+    EXPECT_EQ(hessianSmoothingPasses(opts, 2 * h), 2); // the same length: a quarter of the passes
+    opts.hessianSmoothingLength = 100 * h;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), MAX_LENGTH_SMOOTHING_PASSES);
+    opts.hessianSmoothing = 3; // fixed passes come on top
+    opts.hessianSmoothingLength = h;
+    EXPECT_EQ(hessianSmoothingPasses(opts, h), 5);
+}
+
+TEST(ShapeFields, SmoothingLengthIsTheSameAsItsPasses)
+{
+    const auto grid =
+        test::createEllipsoidSdf(5, Vec<3>(0.5, 0.5, 0.5), Vec<3>(0.3, 0.25, 0.2), 3, 4.0);
+    const double h = grid->voxelSize()[0];
+    ShapeFieldOptions byLength, byCount, none;
+    byLength.hessianSmoothingLength = h; // two passes at this grid
+    byCount.hessianSmoothing = 2;
+    const ShapeFields<3> a(*grid, byLength), b(*grid, byCount), c(*grid, none);
+    ASSERT_EQ(a.blockCount(), b.blockCount());
+    const size_t bytes =
+        sizeof(float) * ShapeFields<3>::NUM_COMPONENTS * ShapeFields<3>::BLOCK_NODES;
+    bool differsFromNone = false;
+    for (size_t i = 0; i < a.blockCount(); ++i) {
+        EXPECT_EQ(std::memcmp(a.blockValues(i), b.blockValues(i), bytes), 0);
+        differsFromNone |= std::memcmp(a.blockValues(i), c.blockValues(i), bytes) != 0;
+    }
+    EXPECT_TRUE(differsFromNone);
 }

@@ -62,6 +62,7 @@ struct EnergyOptions
     double tau = EnergyParameters().tau;
     double membraneSaturation = 0; ///< --membrane-saturation (0: the paper's membrane)
     int hessianSmoothing = 0;      ///< ShapeFieldOptions::hessianSmoothing
+    double noiseSmoothing = 0;     ///< --noise-smoothing (MatchOptions::hessianNoiseFactor)
     int threads = 0;               ///< 0: all cores
     bool json = false;
     bool quiet = false;

@@ -33,6 +33,7 @@ configKeys()
         {"theta", "--theta"},
         {"tau", "--tau"},
         {"hessianSmoothing", "--hessian-smoothing"},
+        {"noiseSmoothing", "--noise-smoothing"},
         {"minLevel", "--min-level"},
         {"maxLevel", "--max-level"},
         {"margin", "--margin"},
@@ -176,6 +177,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("secondPath")) {
         settings.push_back({"secondPath", "--second-path", "off"});
+    }
+    // ... and one before the noise-adaptive Hessian smoothing (no noiseSmoothing) had none.
+    if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
+        !params.contains("noiseSmoothing")) {
+        settings.push_back({"noiseSmoothing", "--noise-smoothing", "0"});
     }
     return settings;
 }

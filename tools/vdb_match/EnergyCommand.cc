@@ -8,6 +8,7 @@
 #include <vdbmatch/energy/Energy.h>
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/FieldSampler.h>
+#include <vdbmatch/geometry/SurfaceNoise.h>
 #include <vdbmatch/io/ShapeIO.h>
 #include <vdbmatch/lattice/SimplexLattice.h>
 
@@ -134,6 +135,12 @@ energyOptionTable()
          [](O& o, const std::string& v) {
              o.hessianSmoothing = parseInt("--hessian-smoothing", v);
          }},
+        {"--noise-smoothing", "F", "Energy (paper tab:parameters)",
+         "an addition to the paper: smooth each shape's distance Hessian over F times its own "
+         "vertex noise, as match does, >= 0 (default " +
+             formatNumber(d.noiseSmoothing) + "; match's default is " +
+             formatNumber(NOISE_SMOOTHING_LENGTH_FACTOR) + ")",
+         [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
         {"--json", nullptr, "Output", "print the results as one JSON object",
          [](O& o, const std::string&) { o.json = true; }},
         {"--quiet", nullptr, "Output", "no progress messages on stderr (errors are still printed)",
@@ -234,6 +241,7 @@ printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const
                           {"margin", r.placement.margin}};
     j["parameters"] = energyParametersJson(r.params);
     j["parameters"]["hessianSmoothing"] = o.hessianSmoothing;
+    j["parameters"]["noiseSmoothing"] = o.noiseSmoothing;
     j["level"] = o.level;
     j["h"] = r.h;
     j["sigma"] = r.sigma;
@@ -287,11 +295,14 @@ evaluate(const EnergyOptions& o, const Shape (&in)[2], EnergyReport& r,
     ShapeSamplerOptions samplerOptions;
     samplerOptions.fields.tau = r.params.tau;
     samplerOptions.fields.hessianSmoothing = o.hessianSmoothing;
+    ShapeSamplerOptions sampler1 = samplerOptions, sampler2 = samplerOptions;
+    sampler1.fields.hessianSmoothingLength = o.noiseSmoothing * surfaceNoise(unit[0]);
+    sampler2.fields.hessianSmoothingLength = o.noiseSmoothing * surfaceNoise(unit[1]);
     const typename FieldSampler<D>::ConstPtr shape1 =
-        buildShapeSampler<D>(unit[0], o.level, samplerOptions);
+        buildShapeSampler<D>(unit[0], o.level, sampler1);
     checkInterrupted();
     const typename FieldSampler<D>::ConstPtr shape2 =
-        buildShapeSampler<D>(unit[1], o.level, samplerOptions);
+        buildShapeSampler<D>(unit[1], o.level, sampler2);
     checkInterrupted();
     r.time.fields = secondsSince(t0);
 
@@ -319,6 +330,9 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
     auto progress = [&](const std::string& message) {
         if (!o.quiet) err << PROGRAM << ": " << message << std::endl;
     };
+    if (!(o.noiseSmoothing >= 0) || !std::isfinite(o.noiseSmoothing)) {
+        OPENVDB_THROW(openvdb::ValueError, "--noise-smoothing must be a finite number >= 0");
+    }
     if (o.hessianSmoothing < 0) {
         OPENVDB_THROW(openvdb::ValueError, "--hessian-smoothing must be >= 0, got " +
                                                std::to_string(o.hessianSmoothing));

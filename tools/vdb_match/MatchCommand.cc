@@ -78,6 +78,7 @@ struct MatchCliOptions
     EnergyKind kind = EnergyKind::Symmetric;
     double margin = DEFAULT_UNIT_BOX_MARGIN;
     int hessianSmoothing = 0;
+    std::optional<double> noiseSmoothing; ///< --noise-smoothing (default per preset)
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
@@ -221,6 +222,37 @@ targetResidualLine(const MatchResidual& r, const Shape& target)
         line += " (" + std::to_string(r.capped) + " vertices beyond " +
                 formatNumber(TARGET_RESIDUAL_BAND_CELLS) + " cells counted at " +
                 formatNumber(TARGET_RESIDUAL_BAND_CELLS) + ": mean and max are lower bounds)";
+    }
+    return line;
+}
+
+/// One line on the noise-adaptive Hessian smoothing (MatchOptions::hessianNoiseFactor): each
+/// shape's noise and the levels at which its Hessian is smoothed.
+template <int D>
+std::string
+noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
+{
+    std::string line = "noise smoothing:";
+    const char* names[2] = {"source", "target"};
+    for (int s = 0; s < 2; ++s) {
+        line += std::string(s ? ";" : "") + " " + names[s] + " noise " +
+                fixed("%.2e", r.shapeNoise[s]) + " of the unit box";
+        ShapeFieldOptions fields = opts.sampler.fields;
+        fields.hessianSmoothing = 0;
+        fields.hessianSmoothingLength = r.hessianSmoothingLength[s];
+        int from = 0;
+        for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
+            if (hessianSmoothingPasses(fields, std::ldexp(1.0, -l)) > 0) from = l;
+        if (from == 0) {
+            line += ", no level smoothed";
+        } else {
+            const int last =
+                hessianSmoothingPasses(fields, std::ldexp(1.0, -opts.multiscale.maxLevel));
+            line += ", Hessian smoothed over " + fixed("%.2e", r.hessianSmoothingLength[s]) +
+                    " from level " + std::to_string(from) + " (" + std::to_string(last) +
+                    (last == 1 ? " pass" : " passes") + " at level " +
+                    std::to_string(opts.multiscale.maxLevel) + ")";
+        }
     }
     return line;
 }
@@ -445,6 +477,15 @@ matchOptionTable()
          "[1,2,1]/4 smoothing passes of the distance Hessian at every level, >= 0 (default 0: "
          "the paper's Hessian). Against a scanner's noise on the inputs (docs/numerics.md)",
          [](O& o, const std::string& v) { o.hessianSmoothing = parseInt("--hessian-smoothing", v); }},
+        {"--noise-smoothing", "F", "Energy (paper tab:parameters)",
+         "an addition to the paper: smooth each shape's distance Hessian over F times the shape's "
+         "own vertex noise (median normal part of the umbrella vector's change), the same length "
+         "at every level, so only the fine levels of a noisy shape (a scan) are smoothed and a "
+         "noise-free one is untouched; >= 0, 0: off (default " +
+             formatNumber(NOISE_SMOOTHING_LENGTH_FACTOR) +
+             "; --preset paper: 0). report.json \"noise\" gives each shape's noise and length "
+             "(docs/numerics.md)",
+         [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
         {"--landmarks", "A.csv B.csv", "Landmarks (an addition to the paper)",
          "corresponding points: row k of A (on the source) should map to row k of B (on the "
          "target); .csv/.xyz/.txt tables with columns x, y (and z in 3D), world units of the "
@@ -730,6 +771,8 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
+    if (o.noiseSmoothing && !(*o.noiseSmoothing >= 0 && std::isfinite(*o.noiseSmoothing)))
+        throw UsageError("--noise-smoothing must be a finite number >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
     if (!o.init.empty() && !o.warmStart.empty()) {
         throw UsageError("--init (this pair's earlier result) and --warm-start (another pair's) "
@@ -1007,6 +1050,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params["coarseSigmaFactor"] = opts.multiscale.coarseSigmaFactor;
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
+             {"noiseSmoothing", opts.hessianNoiseFactor},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
              {"maxLevel", opts.multiscale.maxLevel},
              {"margin", opts.margin},
@@ -1128,6 +1172,12 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     for (const LevelSummary& l : r.levels)
         levels.push_back(levelJson(l));
     j["levels"] = levels;
+    if (opts.hessianNoiseFactor > 0) {
+        j["noise"] =
+            Json{{"source", r.shapeNoise[0]},
+                 {"target", r.shapeNoise[1]},
+                 {"smoothingLength", {r.hessianSmoothingLength[0], r.hessianSmoothingLength[1]}}};
+    }
     if (r.secondPath.requested) {
         const SecondPathSummary& sp = r.secondPath;
         j["secondPath"] = Json{{"ran", sp.ran},
@@ -1227,6 +1277,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.margin = o.margin;
     opts.refinementMarginCells = o.refinementMargin;
     opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
+    if (o.noiseSmoothing) opts.hessianNoiseFactor = *o.noiseSmoothing;
     // --landmarks A B: the same number of points in each, in world units of the inputs.
     if (!o.landmarkFiles.empty()) {
         if (o.landmarkFiles.size() != 2)
@@ -1589,6 +1640,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
             << "\n";
     if (result.innerDistance.requested)
         out << "vdb_match: " << innerDistanceLine(result.innerDistance) << "\n";
+    if (opts.hessianNoiseFactor > 0) out << "vdb_match: " << noiseLine(result, opts) << "\n";
     if (result.secondPath.ran) out << "vdb_match: " << secondPathLine(result.secondPath) << "\n";
     out << "vdb_match: wrote " << (fs::path(dir) / "deformation.vdb").string();
     for (std::size_t i = 1; i < extra.files.size(); ++i)

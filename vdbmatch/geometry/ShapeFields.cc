@@ -127,6 +127,18 @@ detail::DenseBlockTable::build(const std::vector<Coord>& blockCoords)
     }
 }
 
+int
+hessianSmoothingPasses(const ShapeFieldOptions& opts, double h)
+{
+    const double s = opts.hessianSmoothingLength;
+    double lengthPasses = 0.0;
+    if (s > 0.0 && h > 0.0) {
+        lengthPasses =
+            std::min(std::round(2.0 * (s / h) * (s / h)), double(MAX_LENGTH_SMOOTHING_PASSES));
+    }
+    return std::max(opts.hessianSmoothing, 0) + int(lengthPasses);
+}
+
 Real
 validateDistanceGrid(const openvdb::FloatGrid& grid, const char* caller)
 {
@@ -166,6 +178,11 @@ ShapeFields<D>::ShapeFields(const openvdb::FloatGrid& grid, const ShapeFieldOpti
     if (opts.hessianSmoothing < 0) {
         OPENVDB_THROW(openvdb::ValueError, "ShapeFields: hessianSmoothing must be >= 0, got " +
                                                std::to_string(opts.hessianSmoothing));
+    }
+    if (!(opts.hessianSmoothingLength >= 0.0) || !std::isfinite(opts.hessianSmoothingLength)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "ShapeFields: hessianSmoothingLength must be >= 0 and finite, got " +
+                          std::to_string(opts.hessianSmoothingLength));
     }
     mVoxelSize = validateDistanceGrid(grid, "ShapeFields");
     const double h = mVoxelSize;
@@ -226,9 +243,10 @@ ShapeFields<D>::ShapeFields(const openvdb::FloatGrid& grid, const ShapeFieldOpti
     mTable.build(blockCoords);
 
     // 3. Hessian smoothing: separable binomial passes, one axis at a time.
-    if (opts.hessianSmoothing > 0) {
+    const int passes = hessianSmoothingPasses(opts, h);
+    if (passes > 0) {
         std::vector<float> smoothed(mOrigins.size() * size_t(NODES) * SYM);
-        for (int iter = 0; iter < opts.hessianSmoothing; ++iter) {
+        for (int iter = 0; iter < passes; ++iter) {
             for (int axis = 0; axis < D; ++axis) {
                 forEachIndex(mOrigins.size(), opts.threaded, [&](size_t k) {
                     for (int off = 0; off < NODES; ++off) {

@@ -53,9 +53,25 @@ struct ShapeFieldOptions
     /// when both of its neighbours along that axis have a Hessian. Meant for signed distances
     /// computed from meshes, whose second differences are noisy.
     int hessianSmoothing = 0;
+    /// Smoothing length s >= 0 (world units of the grid) of further passes, an addition to the
+    /// paper: at voxel size h, min(round(2 s^2 / h^2), MAX_LENGTH_SMOOTHING_PASSES) passes, on top
+    /// of hessianSmoothing. n passes are a binomial filter of variance n h^2 / 2 per axis, so the
+    /// Hessian is smoothed over about the same length s at every level: none where s < h / 2
+    /// (coarse levels, whose second differences amplify noise less), more at finer ones.
+    /// match() sets it per shape from the shape's own noise (geometry/SurfaceNoise.h).
+    Real hessianSmoothingLength = 0;
     /// Use TBB. The results do not depend on this flag or on the number of threads.
     bool threaded = true;
 };
+
+/// Most passes that ShapeFieldOptions::hessianSmoothingLength adds at one grid: a binomial
+/// filter of width h sqrt(32) (5.7 voxels), enough for a scan's noise at the finest levels match()
+/// accepts; a very coarse or faceted mesh, whose measured noise is large, costs at most this.
+constexpr int MAX_LENGTH_SMOOTHING_PASSES = 64;
+
+/// Hessian smoothing passes of ShapeFields at voxel size @a h: opts.hessianSmoothing plus
+/// min(round(2 s^2 / h^2), MAX_LENGTH_SMOOTHING_PASSES) with s = opts.hessianSmoothingLength.
+int hessianSmoothingPasses(const ShapeFieldOptions& opts, double h);
 
 /// Fields at one node, in the grid's world (Omega) units.
 template <int D> struct NodeFields

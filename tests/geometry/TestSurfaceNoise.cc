@@ -1,0 +1,117 @@
+/// @file TestSurfaceNoise.cc
+/// @brief surfaceNoise(): a scanner's noise is measured, curvature and faceting are not, and the
+///        measure follows the shape's scale and ignores the elements' orientation.
+#include "support/TestSurfaces.h"
+
+#include <vdbmatch/geometry/SurfaceNoise.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace vdbmatch;
+using vdbmatch::test::ellipseCurve;
+using vdbmatch::test::uvSphere;
+
+namespace {
+
+/// Moves every point of @a s along its radial direction from @a centre by N(0, sigma), seeded.
+template <int D>
+Surface<D>
+radialNoise(Surface<D> s, const Vec<D>& centre, double sigma, unsigned seed)
+{
+    std::mt19937 random(seed);
+    std::normal_distribution<double> normal(0.0, sigma);
+    for (Vec<D>& p : s.points)
+        p += normal(random) * (p - centre).normalized();
+    return s;
+}
+
+} // namespace
+
+TEST(SurfaceNoise, ScanNoiseIsMeasuredAndCurvatureIsNot3D)
+{
+    // Radius 1, edges about 0.04-0.08: a smooth surface, and the same with a scanner's noise.
+    const Vec<3> centre(0.2, -0.1, 0.3);
+    const Surface<3> clean = uvSphere(centre, 1.0, 40, 80);
+    const double sigma = 0.01;
+    const double cleanNoise = surfaceNoise(clean);
+    const double noisy = surfaceNoise(radialNoise(clean, centre, sigma, 7));
+    std::printf("sphere: noise %.3g clean, %.3g with sigma %.3g\n", cleanNoise, noisy, sigma);
+    // The normal part of the umbrella vector alone is e^2 / (4 R) ~ 1e-3 here: the change of
+    // the umbrella vector cancels the curvature.
+    EXPECT_LT(cleanNoise, 0.02 * sigma);
+    // Gaussian noise sigma: r(v) has a standard deviation of about 1.2 sigma, median 0.8 sigma.
+    EXPECT_GT(noisy, 0.5 * sigma);
+    EXPECT_LT(noisy, 1.2 * sigma);
+}
+
+TEST(SurfaceNoise, ScanNoiseIsMeasuredAndCurvatureIsNot2D)
+{
+    const Vec<2> centre(1.0, 2.0);
+    const Surface<2> clean = ellipseCurve(centre, 1.0, 0.6, 600);
+    const double sigma = 0.004;
+    const double cleanNoise = surfaceNoise(clean);
+    const double noisy = surfaceNoise(radialNoise(clean, centre, sigma, 11));
+    std::printf("ellipse: noise %.3g clean, %.3g with sigma %.3g\n", cleanNoise, noisy, sigma);
+    EXPECT_LT(cleanNoise, 0.02 * sigma);
+    // A polyline vertex has two neighbours: r(v) has a standard deviation of about 2.1 sigma.
+    EXPECT_GT(noisy, 0.8 * sigma);
+    EXPECT_LT(noisy, 2.5 * sigma);
+}
+
+TEST(SurfaceNoise, RegularFacetsAreNotNoise)
+{
+    // The icosahedron and a 12-gon: every vertex alike, so the umbrella vectors are all the same
+    // size along the normal (0.2 and 0.03 of the radius) and their change is zero.
+    const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+    Surface<3> ico;
+    for (double a : {-1.0, 1.0})
+        for (double b : {-t, t}) {
+            ico.points.emplace_back(0, a, b);
+            ico.points.emplace_back(a, b, 0);
+            ico.points.emplace_back(b, 0, a);
+        }
+    // The 20 faces: the vertex triples at mutual distance 2 (the edge length).
+    const int n = int(ico.points.size());
+    for (int i = 0; i < n; ++i)
+        for (int j = i + 1; j < n; ++j)
+            for (int k = j + 1; k < n; ++k) {
+                auto edge = [&](int p, int q) {
+                    return std::abs((ico.points[p] - ico.points[q]).norm() - 2.0) < 1e-9;
+                };
+                if (edge(i, j) && edge(j, k) && edge(i, k)) ico.elements.push_back({i, j, k});
+            }
+    ASSERT_EQ(ico.elements.size(), 20u);
+    EXPECT_LT(surfaceNoise(ico), 1e-12);
+    EXPECT_LT(surfaceNoise(ellipseCurve(Vec<2>(0.3, 0.1), 1.0, 1.0, 12)), 1e-12);
+    // The same with noise of 1% of the radius is seen.
+    const double r = ico.points[0].norm();
+    EXPECT_GT(surfaceNoise(radialNoise(ico, Vec<3>(0, 0, 0), 0.01 * r, 3)), 1e-3 * r);
+}
+
+TEST(SurfaceNoise, FollowsTheScaleAndIgnoresOrientation)
+{
+    const Vec<3> centre(0, 0, 0);
+    const Surface<3> s = radialNoise(uvSphere(centre, 1.0, 20, 40), centre, 0.01, 5);
+    const double base = surfaceNoise(s);
+    Surface<3> scaled = s;
+    for (Vec<3>& p : scaled.points)
+        p = 2.5 * p + Vec<3>(3.0, -1.0, 0.5);
+    EXPECT_NEAR(surfaceNoise(scaled), 2.5 * base, 1e-12 * base);
+    // Every other triangle reversed: the vertex normal is a direction, not an orientation.
+    Surface<3> flipped = s;
+    for (std::size_t i = 0; i < flipped.elements.size(); i += 2)
+        std::swap(flipped.elements[i][1], flipped.elements[i][2]);
+    EXPECT_EQ(surfaceNoise(flipped), base);
+}
+
+TEST(SurfaceNoise, EmptyOrInvalidIsZero)
+{
+    EXPECT_EQ(surfaceNoise(Surface<3>()), 0.0);
+    EXPECT_EQ(surfaceNoise(Surface<2>()), 0.0);
+    Surface<2> bad = ellipseCurve(Vec<2>(0, 0), 1, 1, 8);
+    bad.elements.push_back({0, 99});
+    EXPECT_EQ(surfaceNoise(bad), 0.0);
+}
