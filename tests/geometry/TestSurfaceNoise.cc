@@ -30,35 +30,30 @@ radialNoise(Surface<D> s, const Vec<D>& centre, double sigma, unsigned seed)
 
 } // namespace
 
-TEST(SurfaceNoise, ScanNoiseIsMeasuredAndCurvatureIsNot3D)
+/// surfaceNoise() of @a clean is below 2% of sigma, and of @a clean with radial Gaussian noise
+/// sigma (seeded) within [lo, hi] sigma.
+template <int D>
+void
+expectNoiseFound(const Surface<D>& clean, const Vec<D>& centre, double sigma, double lo, double hi)
 {
-    // Radius 1, edges about 0.04-0.08: a smooth surface, and the same with a scanner's noise.
-    const Vec<3> centre(0.2, -0.1, 0.3);
-    const Surface<3> clean = uvSphere(centre, 1.0, 40, 80);
-    const double sigma = 0.01;
     const double cleanNoise = surfaceNoise(clean);
     const double noisy = surfaceNoise(radialNoise(clean, centre, sigma, 7));
-    std::printf("sphere: noise %.3g clean, %.3g with sigma %.3g\n", cleanNoise, noisy, sigma);
-    // The normal part of the umbrella vector alone is e^2 / (4 R) ~ 1e-3 here: the change of
-    // the umbrella vector cancels the curvature.
+    std::printf("%dD: noise %.3g clean, %.3g with sigma %.3g\n", D, cleanNoise, noisy, sigma);
     EXPECT_LT(cleanNoise, 0.02 * sigma);
-    // Gaussian noise sigma: r(v) has a standard deviation of about 1.2 sigma, median 0.8 sigma.
-    EXPECT_GT(noisy, 0.5 * sigma);
-    EXPECT_LT(noisy, 1.2 * sigma);
+    EXPECT_GT(noisy, lo * sigma);
+    EXPECT_LT(noisy, hi * sigma);
 }
 
-TEST(SurfaceNoise, ScanNoiseIsMeasuredAndCurvatureIsNot2D)
+TEST(SurfaceNoise, ScanNoiseIsMeasuredAndCurvatureIsNot)
 {
-    const Vec<2> centre(1.0, 2.0);
-    const Surface<2> clean = ellipseCurve(centre, 1.0, 0.6, 600);
-    const double sigma = 0.004;
-    const double cleanNoise = surfaceNoise(clean);
-    const double noisy = surfaceNoise(radialNoise(clean, centre, sigma, 11));
-    std::printf("ellipse: noise %.3g clean, %.3g with sigma %.3g\n", cleanNoise, noisy, sigma);
-    EXPECT_LT(cleanNoise, 0.02 * sigma);
+    // A sphere of radius 1, edges about 0.04-0.08. The normal part of the umbrella vector alone
+    // is e^2 / (4 R) ~ 1e-3 here, a tenth of the noise: its change cancels the curvature.
+    // Gaussian noise sigma: r(v) has a standard deviation of about 1.2 sigma, median 0.8 sigma.
+    const Vec<3> centre(0.2, -0.1, 0.3);
+    expectNoiseFound<3>(uvSphere(centre, 1.0, 40, 80), centre, 0.01, 0.5, 1.2);
     // A polyline vertex has two neighbours: r(v) has a standard deviation of about 2.1 sigma.
-    EXPECT_GT(noisy, 0.8 * sigma);
-    EXPECT_LT(noisy, 2.5 * sigma);
+    const Vec<2> middle(1.0, 2.0);
+    expectNoiseFound<2>(ellipseCurve(middle, 1.0, 0.6, 600), middle, 0.004, 0.8, 2.5);
 }
 
 TEST(SurfaceNoise, RegularFacetsAreNotNoise)

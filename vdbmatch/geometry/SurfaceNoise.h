@@ -16,10 +16,10 @@
 ///   left out;
 /// - the noise is the median over the vertices of |r(v)|.
 ///
-/// Measured (docs/numerics.md "Noise-adaptive Hessian smoothing"): 0.5-19 x 10^-6 of the
-/// bounding box diagonal on the accuracy benchmark's meshes and outlines and 4-6 x 10^-5 on
-/// surfaces extracted from level sets, against 1.6-2.6 x 10^-3 on its scans (Gaussian noise of
-/// 0.2% of the diagonal).
+/// Measured (docs/numerics.md "Noise-adaptive Hessian smoothing"), in unit-box lengths after
+/// match()'s placement: 0.4-1.4 x 10^-5 on the accuracy benchmark's noise-free meshes and
+/// outlines, 5 x 10^-5 on the surfaces extracted from the bundled starfish level sets, against
+/// 4.6-7.4 x 10^-4 on its scans (Gaussian noise of 0.2% of the shape's diagonal).
 #pragma once
 
 #include <vdbmatch/geometry/Surface.h>
@@ -32,11 +32,12 @@ namespace vdbmatch {
 template <int D> double surfaceNoise(const Surface<D>& surface);
 
 /// Hessian smoothing length per unit of surfaceNoise() that match() uses by default
-/// (MatchOptions::hessianSmoothingFromNoise): s = 4 e. On the benchmark's scans (e about 2e-3
-/// in Omega units) s is about 1/128, so levels 4 and 5 get no pass, level 6 one, level 7 two
-/// (ShapeFieldOptions::hessianSmoothingLength); on its noise-free inputs no level up to 10 gets
-/// one.
-constexpr double NOISE_SMOOTHING_LENGTH_FACTOR = 4.0;
+/// (MatchOptions::hessianNoiseFactor): s = 16 e. On the benchmark's 3D scans s is 0.0074-0.011
+/// of the unit box: no pass at levels 4 and 5, 0-1 at level 6, 2-4 at level 7
+/// (ShapeFieldOptions::hessianSmoothingLength); on its noise-free inputs and the bundled level
+/// sets no pass at any level match() accepts. Chosen on the benchmark's scans (3D and 2D, one
+/// run each of 8, 12, 16 and about 28; docs/numerics.md).
+constexpr double NOISE_SMOOTHING_LENGTH_FACTOR = 16.0;
 
 template <> double surfaceNoise<2>(const Surface<2>& surface);
 template <> double surfaceNoise<3>(const Surface<3>& surface);
