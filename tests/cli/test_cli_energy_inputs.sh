@@ -100,6 +100,7 @@ assert plain["terms"]["bend"] != smoothed["terms"]["bend"], (plain["terms"], smo
 for k in ("match", "mem", "vol"):
     assert plain["terms"][k] == smoothed["terms"][k], (k, plain["terms"], smoothed["terms"])
 noise = report["noise"]
+assert "noise" not in plain and smoothed["noise"] == noise, (smoothed.get("noise"), noise)
 assert noise["target"] > 30 * noise["source"] > 0, noise
 assert noise["smoothingLength"] == [4 * noise["source"], 4 * noise["target"]], noise
 PY

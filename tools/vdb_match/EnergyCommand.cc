@@ -15,6 +15,7 @@
 #include <openvdb/openvdb.h>
 #include <tbb/global_control.h>
 
+#include <array>
 #include <functional>
 #include <optional>
 #include <ostream>
@@ -169,6 +170,7 @@ struct EnergyReport
     std::size_t simplices = 0;
     EnergyTerms terms;
     double total = 0;
+    std::array<double, 2> noise{{0.0, 0.0}}; ///< surfaceNoise() of the placed shapes
     Timings time;
 };
 
@@ -242,6 +244,12 @@ printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const
     j["parameters"] = energyParametersJson(r.params);
     j["parameters"]["hessianSmoothing"] = o.hessianSmoothing;
     j["parameters"]["noiseSmoothing"] = o.noiseSmoothing;
+    if (o.noiseSmoothing > 0) {
+        j["noise"] = Json{
+            {"source", r.noise[0]},
+            {"target", r.noise[1]},
+            {"smoothingLength", {o.noiseSmoothing * r.noise[0], o.noiseSmoothing * r.noise[1]}}};
+    }
     j["level"] = o.level;
     j["h"] = r.h;
     j["sigma"] = r.sigma;
@@ -296,8 +304,9 @@ evaluate(const EnergyOptions& o, const Shape (&in)[2], EnergyReport& r,
     samplerOptions.fields.tau = r.params.tau;
     samplerOptions.fields.hessianSmoothing = o.hessianSmoothing;
     ShapeSamplerOptions sampler1 = samplerOptions, sampler2 = samplerOptions;
-    sampler1.fields.hessianSmoothingLength = o.noiseSmoothing * surfaceNoise(unit[0]);
-    sampler2.fields.hessianSmoothingLength = o.noiseSmoothing * surfaceNoise(unit[1]);
+    if (o.noiseSmoothing > 0) r.noise = {surfaceNoise(unit[0]), surfaceNoise(unit[1])};
+    sampler1.fields.hessianSmoothingLength = o.noiseSmoothing * r.noise[0];
+    sampler2.fields.hessianSmoothingLength = o.noiseSmoothing * r.noise[1];
     const typename FieldSampler<D>::ConstPtr shape1 =
         buildShapeSampler<D>(unit[0], o.level, sampler1);
     checkInterrupted();
