@@ -303,8 +303,9 @@ struct MatchOptions
     /// "Noise-adaptive Hessian smoothing"): each shape's Hessian of d is smoothed over
     /// hessianNoiseFactor times the shape's own vertex noise (geometry/SurfaceNoise.h, Omega
     /// units), which sets sampler.fields.hessianSmoothingLength per shape: a scan's fine levels
-    /// are smoothed, a noise-free mesh or outline is left bitwise as without. >= 0; 0: off
-    /// (paper()); defaults(): NOISE_SMOOTHING_LENGTH_FACTOR.
+    /// are smoothed; the benchmark's noise-free meshes and outlines and the bundled level sets
+    /// get no pass and run bitwise as without. >= 0; 0: off (paper()); defaults():
+    /// NOISE_SMOOTHING_LENGTH_FACTOR.
     double hessianNoiseFactor = 0;
     bool threaded = true;
 
