@@ -763,10 +763,10 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     ShapeSamplerOptions sourceSampler = opts.sampler, targetSampler = opts.sampler;
     if (opts.hessianNoiseFactor > 0) {
         result.shapeNoise = {surfaceNoise(unitSource), surfaceNoise(unitTarget)};
-        for (int s = 0; s < 2; ++s)
-            result.hessianSmoothingLength[s] = opts.hessianNoiseFactor * result.shapeNoise[s];
-        sourceSampler.fields.hessianSmoothingLength = result.hessianSmoothingLength[0];
-        targetSampler.fields.hessianSmoothingLength = result.hessianSmoothingLength[1];
+        sourceSampler.fields.hessianSmoothingLength =
+            opts.hessianNoiseFactor * result.shapeNoise[0];
+        targetSampler.fields.hessianSmoothingLength =
+            opts.hessianNoiseFactor * result.shapeNoise[1];
     }
 
     const multiscale::ContextLevelBuilder<D> builder =

@@ -470,10 +470,9 @@ template <int D> struct MatchResult
     AutoLandmarkSummary autoLandmarks;
     InnerDistanceSummary innerDistance;
     SecondPathSummary secondPath;
-    /// surfaceNoise() of the placed source and target (Omega units) and the Hessian smoothing
-    /// length each got (MatchOptions::hessianNoiseFactor); zeros when the factor is 0.
+    /// surfaceNoise() of the placed source and target (Omega units); each shape's Hessian
+    /// smoothing length is MatchOptions::hessianNoiseFactor times it. Zeros when the factor is 0.
     std::array<double, 2> shapeNoise{{0.0, 0.0}};
-    std::array<double, 2> hessianSmoothingLength{{0.0, 0.0}};
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 

@@ -239,7 +239,7 @@ noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
                 fixed("%.2e", r.shapeNoise[s]) + " of the unit box";
         ShapeFieldOptions fields = opts.sampler.fields;
         fields.hessianSmoothing = 0;
-        fields.hessianSmoothingLength = r.hessianSmoothingLength[s];
+        fields.hessianSmoothingLength = opts.hessianNoiseFactor * r.shapeNoise[s];
         int from = 0;
         for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
             if (hessianSmoothingPasses(fields, std::ldexp(1.0, -l)) > 0) from = l;
@@ -248,7 +248,7 @@ noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
         } else {
             const int last =
                 hessianSmoothingPasses(fields, std::ldexp(1.0, -opts.multiscale.maxLevel));
-            line += ", Hessian smoothed over " + fixed("%.2e", r.hessianSmoothingLength[s]) +
+            line += ", Hessian smoothed over " + fixed("%.2e", fields.hessianSmoothingLength) +
                     " from level " + std::to_string(from) + " (" + std::to_string(last) +
                     (last == 1 ? " pass" : " passes") + " at level " +
                     std::to_string(opts.multiscale.maxLevel) + ")";
@@ -1173,10 +1173,11 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
         levels.push_back(levelJson(l));
     j["levels"] = levels;
     if (opts.hessianNoiseFactor > 0) {
-        j["noise"] =
-            Json{{"source", r.shapeNoise[0]},
-                 {"target", r.shapeNoise[1]},
-                 {"smoothingLength", {r.hessianSmoothingLength[0], r.hessianSmoothingLength[1]}}};
+        j["noise"] = Json{{"source", r.shapeNoise[0]},
+                          {"target", r.shapeNoise[1]},
+                          {"smoothingLength",
+                           {opts.hessianNoiseFactor * r.shapeNoise[0],
+                            opts.hessianNoiseFactor * r.shapeNoise[1]}}};
     }
     if (r.secondPath.requested) {
         const SecondPathSummary& sp = r.secondPath;
