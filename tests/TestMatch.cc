@@ -292,6 +292,72 @@ TEST(Match, NoiseSmoothingActsOnNoisyShapesOnly)
     EXPECT_LT(noisy.residual.meanUnit, 0.5 * std::ldexp(1.0, -7));
 }
 
+TEST(Match, NoiseBendingLowersTheBendingWeightWhereTheHessianIsSmoothed)
+{
+    // The factor: 1 / (1 + n / P), exactly 1 without passes or with P = 0 (off).
+    EXPECT_EQ(noiseBendingFactor(0, DEFAULT_NOISE_BENDING_PASSES), 1.0);
+    EXPECT_EQ(noiseBendingFactor(7, 0.0), 1.0);
+    EXPECT_EQ(noiseBendingFactor(4, 4.0), 0.5);
+    EXPECT_EQ(noiseBendingFactor(12, 4.0), 0.25);
+    EXPECT_EQ(MatchOptions::defaults(2).noiseBendingPasses, DEFAULT_NOISE_BENDING_PASSES);
+    EXPECT_EQ(MatchOptions::defaults(3).noiseBendingPasses, DEFAULT_NOISE_BENDING_PASSES);
+    EXPECT_EQ(MatchOptions::paper(2).noiseBendingPasses, 0.0);
+
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 7;
+    const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+    MatchOptions off = opts;
+    off.noiseBendingPasses = 0;
+
+    // Noise-free shapes: no pass, the paper's weight at every level, bitwise the same result.
+    const MatchResult<2> clean = match<2>(circle, ellipse, placement, opts);
+    const MatchResult<2> cleanOff = match<2>(circle, ellipse, placement, off);
+    for (const LevelSummary& l : clean.levels)
+        EXPECT_EQ(l.bendingFactor, 1.0) << l.level;
+    EXPECT_TRUE(clean.displacement == cleanOff.displacement);
+
+    // A scan of the ellipse (radial noise of 0.8% of its size): each level's factor follows
+    // the target's passes there, below 1 at the fine levels only.
+    Surface<2> scan = ellipse;
+    std::uint64_t state = 777;
+    for (Vec<2>& p : scan.points) {
+        double sum = 0; // Irwin-Hall: about N(0, 1)
+        for (int k = 0; k < 12; ++k) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            sum += double(state >> 11) * 0x1.0p-53;
+        }
+        p += 0.04 * (sum - 6.0) * (p - Vec<2>(3.4, -0.8)).normalized();
+    }
+    const MatchResult<2> noisy = match<2>(circle, scan, placement, opts);
+    ASSERT_FALSE(noisy.levels.empty());
+    const double length = opts.hessianNoiseFactor * noisy.shapeNoise[1];
+    EXPECT_EQ(noisy.levels.front().bendingFactor, 1.0);
+    EXPECT_LT(noisy.levels.back().bendingFactor, 1.0);
+    for (const LevelSummary& l : noisy.levels) {
+        const int passes = lengthSmoothingPasses(length, std::ldexp(1.0, -l.level));
+        EXPECT_EQ(l.bendingFactor, noiseBendingFactor(passes, opts.noiseBendingPasses)) << l.level;
+    }
+    EXPECT_GT(noisy.minJacobian, 0.0);
+    EXPECT_LT(noisy.residual.meanUnit, 0.5 * std::ldexp(1.0, -7));
+
+    // At one level the factor is c_bend's and nothing else's: the run equals one with the factor
+    // folded into c_bend and the noise bending off, bitwise.
+    MatchOptions one = opts;
+    one.multiscale.minLevel = one.multiscale.maxLevel = 7;
+    one.secondPath = false;
+    const MatchResult<2> weighted = match<2>(circle, scan, placement, one);
+    ASSERT_EQ(weighted.levels.size(), 1u);
+    ASSERT_LT(weighted.levels[0].bendingFactor, 1.0);
+    MatchOptions folded = one;
+    folded.noiseBendingPasses = 0;
+    folded.multiscale.energy.cBend *= weighted.levels[0].bendingFactor;
+    const MatchResult<2> scaled = match<2>(circle, scan, placement, folded);
+    EXPECT_EQ(scaled.levels[0].bendingFactor, 1.0);
+    EXPECT_TRUE(weighted.displacement == scaled.displacement);
+}
+
 TEST(Match, HeavierMetricIs2DDefaultAndChangesThePathNotTheEnergy)
 {
     // The descent's H1 metric weight (solver/H1Metric.h; the paper gives none): 2 sigma^2 by

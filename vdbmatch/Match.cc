@@ -138,6 +138,7 @@ MatchOptions::defaults(int dim)
         dim == 2 ? DEFAULT_INNER_DISTANCE_WEIGHT_2D : DEFAULT_INNER_DISTANCE_WEIGHT_3D;
     opts.secondPath = true;
     opts.hessianNoiseFactor = NOISE_SMOOTHING_LENGTH_FACTOR;
+    opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
     return opts;
 }
 
@@ -183,6 +184,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: hessianNoiseFactor must be finite and >= 0, got "
                           << hessianNoiseFactor);
+    }
+    if (!(noiseBendingPasses >= 0) || !std::isfinite(noiseBendingPasses)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: noiseBendingPasses must be finite and >= 0, got "
+                          << noiseBendingPasses);
     }
     if (!(secondPathShare >= 0 && secondPathShare <= 1)) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -787,6 +793,11 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             };
             detail::invokeBoth(opts.threaded, buildSource, buildTarget);
             level.surfacePoints = &unitSource.points;
+            level.bendingFactor = noiseBendingFactor(
+                std::max(lengthSmoothingPasses(sourceSampler.fields.hessianSmoothingLength, h),
+                         lengthSmoothingPasses(targetSampler.fields.hessianSmoothingLength, h)),
+                opts.noiseBendingPasses);
+            summary.bendingFactor = level.bendingFactor;
             if (l <= lastLandmarkLevel) {
                 if (!early.source.empty()) level.landmarks = &early;
             } else if (!anchored.source.empty()) {

@@ -307,6 +307,13 @@ struct MatchOptions
     /// get no pass and run bitwise as without. >= 0; 0: off (paper()); defaults():
     /// NOISE_SMOOTHING_LENGTH_FACTOR.
     double hessianNoiseFactor = 0;
+    /// Bending weight on noisy shapes, an addition to the paper: at each level c_bend is
+    /// multiplied by noiseBendingFactor(n, noiseBendingPasses), n the larger of the two shapes'
+    /// noise smoothing passes there (lengthSmoothingPasses of their Hessian smoothing lengths,
+    /// set by hessianNoiseFactor). A smoothed Hessian is a less certain shape operator; where
+    /// none is smoothed (noise-free inputs) the weight is the paper's, bitwise. >= 0; 0: off
+    /// (paper()); defaults(): DEFAULT_NOISE_BENDING_PASSES.
+    double noiseBendingPasses = 0;
     bool threaded = true;
 
     /// tab:parameters for dimension 2 or 3, with the DEFAULT_MATCH_* stopping rule and
@@ -339,6 +346,7 @@ struct LevelSummary
     int level = 0;
     LatticeSummary lattice;
     solver::Report report;
+    double bendingFactor = 1;  ///< c_bend's factor at this level (noiseBendingFactor())
     double fieldSeconds = 0;   ///< signed distances and shape fields of both shapes
     double latticeSeconds = 0; ///< adaptive lattice
 };

@@ -82,4 +82,11 @@ EnergyParameters::validate() const
                       "EnergyParameters: sigma factor must be finite and > 0, got " << sigmaFactor);
 }
 
+double
+noiseBendingFactor(int noisePasses, double P)
+{
+    if (!(P > 0) || noisePasses <= 0) return 1.0;
+    return 1.0 / (1.0 + double(noisePasses) / P);
+}
+
 } // namespace vdbmatch

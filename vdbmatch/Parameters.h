@@ -29,6 +29,19 @@ constexpr double MAX_COEFFICIENT = 1e6;
 /// already span 2^-64..2^64 at 8.
 constexpr double MAX_EXPONENT = 8.0;
 
+/// Default MatchOptions::noiseBendingPasses P (--noise-bending), an addition to the paper: at a
+/// level where the noise smoothing gives a shape's distance Hessian n passes (the larger n of the
+/// two shapes), eq:EsymBend weighs c_bend noiseBendingFactor(n, P) = c_bend / (1 + n / P). n = 0
+/// on noise-free inputs, which keep the paper's weight bitwise. Measured on the benchmark's
+/// scans (docs/numerics.md "Bending weight on noisy shapes"): where the Hessian had to be
+/// smoothed, the bending term still costs correspondence; P = 4 halves c_bend where 4 passes
+/// are needed (the 2D scans at level 7, the 3D scans at level 8).
+constexpr double DEFAULT_NOISE_BENDING_PASSES = 4;
+
+/// The factor of c_bend for @a noisePasses Hessian smoothing passes: 1 / (1 + noisePasses / P),
+/// and exactly 1 when P <= 0 (off) or noisePasses <= 0.
+double noiseBendingFactor(int noisePasses, double P);
+
 struct EnergyParameters
 {
     Real cMatch = 4.096; ///< c_match

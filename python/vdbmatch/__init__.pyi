@@ -71,6 +71,7 @@ def match(
     tau: float | None = None,
     hessian_smoothing: int | None = None,
     noise_smoothing: float | None = None,
+    noise_bending: float | None = None,
     landmarks: tuple[Path | npt.ArrayLike, Path | npt.ArrayLike] | None = None,
     landmark_weight: float | None = None,
     auto_landmarks: str | None = None,
@@ -127,6 +128,7 @@ def energy(
     membrane_saturation: float | None = None,
     hessian_smoothing: int | None = None,
     noise_smoothing: float | None = None,
+    noise_bending: float | None = None,
     threads: int | None = None,
 ) -> dict[str, Any]: ...
 

@@ -46,7 +46,7 @@ initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
 for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation", "hessianSmoothing",
-            "noiseSmoothing"):
+            "noiseSmoothing", "noiseBending"):
     assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"
@@ -103,6 +103,25 @@ noise = report["noise"]
 assert "noise" not in plain and smoothed["noise"] == noise, (smoothed.get("noise"), noise)
 assert noise["target"] > 30 * noise["source"] > 0, noise
 assert noise["smoothingLength"] == [4 * noise["source"], 4 * noise["target"]], noise
+PY
+# The bending weight follows the passes of the noise smoothing (an addition): the term scales by
+# the level's factor, 1 / (1 + n / P), and nothing else changes.
+count=$((count + 1))
+if "$VDB_MATCH" energy "$FIGURE_A" "$SCRATCH/figure_b_scan.polyline" --level 8 --json --quiet --noise-smoothing 4 --noise-bending 0 >"$SCRATCH/nb0.json" &&
+    "$PYTHON" - "$SCRATCH/nb0.json" "$SCRATCH/noise-smoothed-2d.json" <<'PY'; then echo "ok   noise-bending-scales-bend"; else fail "noise-bending-scales-bend"; fi
+import json, sys
+off, on = (json.load(open(f)) for f in sys.argv[1:])
+assert off["parameters"]["noiseBending"] == 0 and on["parameters"]["noiseBending"] == 4
+assert off["bendingFactor"] == 1 and 0 < on["bendingFactor"] < 1, (off["bendingFactor"], on["bendingFactor"])
+# n passes: the factor is 4 / (4 + n) for a whole n >= 1
+n = 4 / on["bendingFactor"] - 4
+assert n >= 1 and abs(n - round(n)) < 1e-9, n
+bend_on, bend_off = on["terms"]["bend"], off["terms"]["bend"]
+assert len(bend_on) == len(bend_off) == 2 and min(bend_off) > 0, (bend_on, bend_off)
+for a, b in zip(bend_on, bend_off):  # the direct and the inverse half
+    assert abs(a - on["bendingFactor"] * b) <= 1e-12 * b, (bend_on, bend_off)
+for k in ("match", "mem", "vol"):
+    assert on["terms"][k] == off["terms"][k], (k, on["terms"], off["terms"])
 PY
 # The saturation lowers the membrane term only (an addition: s log(1 + W/s) <= W).
 count=$((count + 1))

@@ -249,13 +249,24 @@ assert "noise" not in reports[0], reports[0].keys()
 noise = reports[2]["noise"]
 assert 0 < noise["source"] < 1e-3 and 0 < noise["target"] < 1e-3, noise
 assert noise["smoothingLength"][1] == default["noiseSmoothing"] * noise["target"], noise
+# the bending weight lowered where the noise smoothing acts (an addition): off in the paper's
+# preset; these noise-free level sets get no pass, so every level keeps the paper's c_bend
+assert paper["noiseBending"] == 0 and default["noiseBending"] == 4, (paper, default)
+for r in reports:
+    assert [l["bendingFactor"] for l in r["levels"]] == [1] * len(r["levels"]), r["levels"]
 PY
 check noise-smoothing-negative 1 '' '--noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-smoothing -1 --quiet
+check noise-bending-negative 1 '' '--noise-bending must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-bending -1 --quiet
 # A report of a version before the noise smoothing reproduces its run without it.
 "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_noise.json"
 check noise-smoothing-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/nold" --config "$SCRATCH/old_noise.json" --levels 3..3 --quiet
 count=$((count + 1))
 if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); assert r["parameters"]["noiseSmoothing"] == 0 and "noise" not in r' "$SCRATCH/nold/report.json"; then echo "ok   noise-smoothing-old-report"; else fail "noise-smoothing-old-report"; fi
+# ... and one before the noise-adaptive bending weight, without it.
+"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseBending"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_bending.json"
+check noise-bending-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/bold" --config "$SCRATCH/old_bending.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["noiseBending"] == 0 and p["noiseSmoothing"] > 0, p' "$SCRATCH/bold/report.json"; then echo "ok   noise-bending-old-report"; else fail "noise-bending-old-report"; fi
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet

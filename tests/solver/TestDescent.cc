@@ -369,6 +369,42 @@ TEST(Descent, CoarseMembraneFactorWeighsTheMembraneBelowTheFinestLevelOnly)
     EXPECT_THROW(opts.validate(), openvdb::ValueError);
 }
 
+TEST(Descent, LevelBendingFactorWeighsTheBendingTermOfItsLevelOnly)
+{
+    // Level::bendingFactor (match()'s noise-adaptive bending weight) multiplies c_bend at its
+    // level and leaves the other terms and levels alone. No descent steps, as above.
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    opts.minLevel = 4;
+    opts.maxLevel = 6;
+    opts.descent.maxIterations = 0;
+    Problem<2> problem(opts.energy);
+    const auto run = [&](Real factorAtLevel5) {
+        const LevelBuilder<2> dense = problem.denseLevels();
+        return MultiscaleDriver<2>(opts).run([&](int l) {
+            Level<2> level = dense(l);
+            if (l == 5) level.bendingFactor = factorAtLevel5;
+            return level;
+        });
+    };
+    const MultiscaleResult<2> paper = run(1), lowered = run(0.25);
+    ASSERT_EQ(paper.reports.size(), 3u);
+    ASSERT_EQ(lowered.reports.size(), 3u);
+    for (std::size_t i = 0; i < 3; ++i) {
+        const EnergyTerms &a = paper.reports[i].terms, &b = lowered.reports[i].terms;
+        const Real scale = i == 1 ? 0.25 : 1.0;
+        for (int k = 0; k < 2; ++k) {
+            ASSERT_GT(a.bend[k], 0.0);
+            EXPECT_NEAR(b.bend[k], scale * a.bend[k], 1e-12 * a.bend[k]) << i;
+            EXPECT_EQ(b.match[k], a.match[k]) << i;
+            EXPECT_EQ(b.mem[k], a.mem[k]) << i;
+            EXPECT_EQ(b.vol[k], a.vol[k]) << i;
+        }
+    }
+    EXPECT_THROW(run(-0.5), openvdb::ValueError);
+    EXPECT_THROW(run(1.5), openvdb::ValueError);
+    EXPECT_THROW(run(std::numeric_limits<Real>::quiet_NaN()), openvdb::ValueError);
+}
+
 TEST(Descent, CoarseVolumeFactorWeighsTheVolumeBelowTheFinestLevelOnly)
 {
     // At the identity the volume densities vanish (det D phi = 1), so the weights are checked

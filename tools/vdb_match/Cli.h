@@ -63,7 +63,8 @@ struct EnergyOptions
     double membraneSaturation = 0; ///< --membrane-saturation (0: the paper's membrane)
     int hessianSmoothing = 0;      ///< ShapeFieldOptions::hessianSmoothing
     double noiseSmoothing = 0;     ///< --noise-smoothing (MatchOptions::hessianNoiseFactor)
-    int threads = 0;               ///< 0: all cores
+    double noiseBending = DEFAULT_NOISE_BENDING_PASSES; ///< --noise-bending (as match's)
+    int threads = 0;                                    ///< 0: all cores
     bool json = false;
     bool quiet = false;
 

@@ -34,6 +34,7 @@ configKeys()
         {"tau", "--tau"},
         {"hessianSmoothing", "--hessian-smoothing"},
         {"noiseSmoothing", "--noise-smoothing"},
+        {"noiseBending", "--noise-bending"},
         {"minLevel", "--min-level"},
         {"maxLevel", "--max-level"},
         {"margin", "--margin"},
@@ -182,6 +183,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
         !params.contains("noiseSmoothing")) {
         settings.push_back({"noiseSmoothing", "--noise-smoothing", "0"});
+    }
+    // ... and one before the noise-adaptive bending weight (no noiseBending) kept c_bend.
+    if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
+        !params.contains("noiseBending")) {
+        settings.push_back({"noiseBending", "--noise-bending", "0"});
     }
     return settings;
 }

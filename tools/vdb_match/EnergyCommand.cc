@@ -15,6 +15,7 @@
 #include <openvdb/openvdb.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <array>
 #include <functional>
 #include <optional>
@@ -142,6 +143,12 @@ energyOptionTable()
              formatNumber(d.noiseSmoothing) + "; match's default is " +
              formatNumber(NOISE_SMOOTHING_LENGTH_FACTOR) + ")",
          [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
+        {"--noise-bending", "X", "Energy (paper tab:parameters)",
+         "an addition to the paper: with --noise-smoothing, weigh the bending term by c_bend / "
+         "(1 + n/X) for the larger number n of noise smoothing passes of the two shapes at "
+         "--level, as match does, >= 0, 0: off (default " +
+             formatNumber(d.noiseBending) + ", as match's)",
+         [](O& o, const std::string& v) { o.noiseBending = parseDouble("--noise-bending", v); }},
         {"--json", nullptr, "Output", "print the results as one JSON object",
          [](O& o, const std::string&) { o.json = true; }},
         {"--quiet", nullptr, "Output", "no progress messages on stderr (errors are still printed)",
@@ -171,6 +178,7 @@ struct EnergyReport
     EnergyTerms terms;
     double total = 0;
     std::array<double, 2> noise{{0.0, 0.0}}; ///< surfaceNoise() of the placed shapes
+    double bendingFactor = 1;                ///< noiseBendingFactor() at the level
     Timings time;
 };
 
@@ -244,6 +252,8 @@ printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const
     j["parameters"] = energyParametersJson(r.params);
     j["parameters"]["hessianSmoothing"] = o.hessianSmoothing;
     j["parameters"]["noiseSmoothing"] = o.noiseSmoothing;
+    j["parameters"]["noiseBending"] = o.noiseBending;
+    j["bendingFactor"] = r.bendingFactor;
     if (o.noiseSmoothing > 0) {
         j["noise"] = Json{
             {"source", r.noise[0]},
@@ -321,7 +331,13 @@ evaluate(const EnergyOptions& o, const Shape (&in)[2], EnergyReport& r,
     checkInterrupted();
     t0 = Clock::now();
     progress("evaluating the energy");
-    const Energy<D> energy(lattice, *shape1, *shape2, r.params, o.kind);
+    r.bendingFactor = noiseBendingFactor(
+        std::max(lengthSmoothingPasses(sampler1.fields.hessianSmoothingLength, lattice.h()),
+                 lengthSmoothingPasses(sampler2.fields.hessianSmoothingLength, lattice.h())),
+        o.noiseBending);
+    EnergyParameters levelParams = r.params;
+    levelParams.cBend *= r.bendingFactor;
+    const Energy<D> energy(lattice, *shape1, *shape2, levelParams, o.kind);
     const NodeVectors<D> u = NodeVectors<D>::Zero(D, Eigen::Index(lattice.nodeCount()));
     r.total = energy.value(u, &r.terms, /*threaded=*/true, interrupter);
     checkInterrupted();
@@ -341,6 +357,9 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
     };
     if (!(o.noiseSmoothing >= 0) || !std::isfinite(o.noiseSmoothing)) {
         OPENVDB_THROW(openvdb::ValueError, "--noise-smoothing must be a finite number >= 0");
+    }
+    if (!(o.noiseBending >= 0) || !std::isfinite(o.noiseBending)) {
+        OPENVDB_THROW(openvdb::ValueError, "--noise-bending must be a finite number >= 0");
     }
     if (o.hessianSmoothing < 0) {
         OPENVDB_THROW(openvdb::ValueError, "--hessian-smoothing must be >= 0, got " +

@@ -79,6 +79,7 @@ struct MatchCliOptions
     double margin = DEFAULT_UNIT_BOX_MARGIN;
     int hessianSmoothing = 0;
     std::optional<double> noiseSmoothing; ///< --noise-smoothing (default per preset)
+    std::optional<double> noiseBending;   ///< --noise-bending (default per preset)
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
@@ -227,7 +228,8 @@ targetResidualLine(const MatchResidual& r, const Shape& target)
 }
 
 /// One line on the noise-adaptive Hessian smoothing (MatchOptions::hessianNoiseFactor): each
-/// shape's noise and the levels at which its Hessian is smoothed.
+/// shape's noise and the levels at which its Hessian is smoothed, and the bending weight's
+/// factor at the finest level (MatchOptions::noiseBendingPasses) when it is below 1.
 template <int D>
 std::string
 noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
@@ -237,23 +239,25 @@ noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
     for (int s = 0; s < 2; ++s) {
         line += std::string(s ? ";" : "") + " " + names[s] + " noise " +
                 fixed("%.2e", r.shapeNoise[s]) + " of the unit box";
-        ShapeFieldOptions fields = opts.sampler.fields;
-        fields.hessianSmoothing = 0;
-        fields.hessianSmoothingLength = opts.hessianNoiseFactor * r.shapeNoise[s];
+        const double length = opts.hessianNoiseFactor * r.shapeNoise[s];
         int from = 0;
         for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
-            if (hessianSmoothingPasses(fields, std::ldexp(1.0, -l)) > 0) from = l;
+            if (lengthSmoothingPasses(length, std::ldexp(1.0, -l)) > 0) from = l;
         if (from == 0) {
             line += ", no level smoothed";
         } else {
             const int last =
-                hessianSmoothingPasses(fields, std::ldexp(1.0, -opts.multiscale.maxLevel));
-            line += ", Hessian smoothed over " + fixed("%.2e", fields.hessianSmoothingLength) +
-                    " from level " + std::to_string(from) + " (" + std::to_string(last) +
+                lengthSmoothingPasses(length, std::ldexp(1.0, -opts.multiscale.maxLevel));
+            line += ", Hessian smoothed over " + fixed("%.2e", length) + " from level " +
+                    std::to_string(from) + " (" + std::to_string(last) +
                     (last == 1 ? " pass" : " passes") + " at level " +
                     std::to_string(opts.multiscale.maxLevel) + ")";
         }
     }
+    const double factor = r.levels.empty() ? 1.0 : r.levels.back().bendingFactor;
+    if (factor < 1.0)
+        line += "; c_bend x" + fixed("%.3g", factor) + " at level " +
+                std::to_string(r.levels.back().level);
     return line;
 }
 
@@ -486,6 +490,15 @@ matchOptionTable()
              "; --preset paper: 0). report.json \"noise\" gives each shape's noise and length "
              "(docs/numerics.md)",
          [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
+        {"--noise-bending", "X", "Energy (paper tab:parameters)",
+         "an addition to the paper: at a level where --noise-smoothing gives a shape's Hessian n "
+         "passes (the larger n of the two shapes), weigh the bending term by c_bend / (1 + n/X): a "
+         "smoothed Hessian is a less certain shape operator. Noise-free shapes get no pass and "
+         "the paper's weight; >= 0, 0: off (default " +
+             formatNumber(DEFAULT_NOISE_BENDING_PASSES) +
+             "; --preset paper: 0). report.json \"levels\" give each level's \"bendingFactor\" "
+             "(docs/numerics.md)",
+         [](O& o, const std::string& v) { o.noiseBending = parseDouble("--noise-bending", v); }},
         {"--landmarks", "A.csv B.csv", "Landmarks (an addition to the paper)",
          "corresponding points: row k of A (on the source) should map to row k of B (on the "
          "target); .csv/.xyz/.txt tables with columns x, y (and z in 3D), world units of the "
@@ -773,6 +786,8 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
     if (o.noiseSmoothing && !(*o.noiseSmoothing >= 0 && std::isfinite(*o.noiseSmoothing)))
         throw UsageError("--noise-smoothing must be a finite number >= 0");
+    if (o.noiseBending && !(*o.noiseBending >= 0 && std::isfinite(*o.noiseBending)))
+        throw UsageError("--noise-bending must be a finite number >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
     if (!o.init.empty() && !o.warmStart.empty()) {
         throw UsageError("--init (this pair's earlier result) and --warm-start (another pair's) "
@@ -1051,6 +1066,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"noiseSmoothing", opts.hessianNoiseFactor},
+             {"noiseBending", opts.noiseBendingPasses},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
              {"maxLevel", opts.multiscale.maxLevel},
              {"margin", opts.margin},
@@ -1160,6 +1176,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
             {"initialEnergy", rep.initialEnergy},
             {"energy", rep.energy},
             {"terms", termsJson(rep.terms)},
+            {"bendingFactor", l.bendingFactor},
             {"gradNorm", rep.gradNorm},
             {"minJacobian", rep.minJacobian},
             {"bandSimplices", rep.terms.bandSimplices},
@@ -1279,6 +1296,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.refinementMarginCells = o.refinementMargin;
     opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
     if (o.noiseSmoothing) opts.hessianNoiseFactor = *o.noiseSmoothing;
+    if (o.noiseBending) opts.noiseBendingPasses = *o.noiseBending;
     // --landmarks A B: the same number of points in each, in world units of the inputs.
     if (!o.landmarkFiles.empty()) {
         if (o.landmarkFiles.size() != 2)

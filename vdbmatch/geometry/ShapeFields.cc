@@ -128,15 +128,17 @@ detail::DenseBlockTable::build(const std::vector<Coord>& blockCoords)
 }
 
 int
+lengthSmoothingPasses(double s, double h)
+{
+    if (!(s > 0.0 && h > 0.0)) return 0;
+    return int(std::min(std::round(2.0 * (s / h) * (s / h)), double(MAX_LENGTH_SMOOTHING_PASSES)));
+}
+
+int
 hessianSmoothingPasses(const ShapeFieldOptions& opts, double h)
 {
-    const double s = opts.hessianSmoothingLength;
-    double lengthPasses = 0.0;
-    if (s > 0.0 && h > 0.0) {
-        lengthPasses =
-            std::min(std::round(2.0 * (s / h) * (s / h)), double(MAX_LENGTH_SMOOTHING_PASSES));
-    }
-    return std::max(opts.hessianSmoothing, 0) + int(lengthPasses);
+    return std::max(opts.hessianSmoothing, 0) +
+           lengthSmoothingPasses(opts.hessianSmoothingLength, h);
 }
 
 Real

@@ -69,8 +69,12 @@ struct ShapeFieldOptions
 /// accepts; a very coarse or faceted mesh, whose measured noise is large, costs at most this.
 constexpr int MAX_LENGTH_SMOOTHING_PASSES = 64;
 
+/// Passes that a smoothing length @a s adds at voxel size @a h:
+/// min(round(2 s^2 / h^2), MAX_LENGTH_SMOOTHING_PASSES), 0 if s or h is not positive.
+int lengthSmoothingPasses(double s, double h);
+
 /// Hessian smoothing passes of ShapeFields at voxel size @a h: opts.hessianSmoothing plus
-/// min(round(2 s^2 / h^2), MAX_LENGTH_SMOOTHING_PASSES) with s = opts.hessianSmoothingLength.
+/// lengthSmoothingPasses(opts.hessianSmoothingLength, h).
 int hessianSmoothingPasses(const ShapeFieldOptions& opts, double h);
 
 /// Fields at one node, in the grid's world (Omega) units.

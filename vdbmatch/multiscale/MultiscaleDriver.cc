@@ -136,6 +136,10 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         if (in.lattice->level() != l)
             OPENVDB_THROW(openvdb::ValueError, "MultiscaleDriver::run: the lattice of level "
                                                    << l << " has level " << in.lattice->level());
+        if (!(in.bendingFactor >= 0 && in.bendingFactor <= 1))
+            OPENVDB_THROW(openvdb::ValueError, "MultiscaleDriver::run: the bending factor of level "
+                                                   << l << " is " << in.bendingFactor
+                                                   << ", not in [0, 1]");
 
         NodeVectors<D> u = result.lattice ? prolongate<D>(*result.lattice, result.displacement,
                                                           *in.lattice, threaded)
@@ -145,7 +149,9 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         // ones up to rounding when the lattice nests in the previous one).
         in.lattice->expand(u);
 
-        Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, mOpts.energyAt(l), mOpts.kind);
+        EnergyParameters levelEnergy = mOpts.energyAt(l);
+        levelEnergy.cBend *= in.bendingFactor;
+        Energy<D> energy(*in.lattice, *in.shape1, *in.shape2, levelEnergy, mOpts.kind);
         std::optional<energy::LandmarkTerm<D>> landmarks;
         if (in.landmarks && !in.landmarks->source.empty()) {
             landmarks.emplace(*in.lattice, *in.landmarks);

@@ -50,6 +50,10 @@ template <int D> struct Level
     /// Points of M1 and the field of M2 of the inner-distance term (energy::InnerDistanceTerm);
     /// null or empty: none. Must outlive run().
     const InnerDistanceSamples<D>* innerDistance = nullptr;
+    /// Factor of energy.cBend at this level, in [0, 1] (1: the paper's eq:EsymBend weight).
+    /// match() lowers it where a shape's Hessian is smoothed for noise
+    /// (MatchOptions::noiseBendingPasses).
+    Real bendingFactor = 1;
 };
 
 /// Builds the inputs of level l (called once per level, in increasing order, on the calling
