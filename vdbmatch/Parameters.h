@@ -35,7 +35,7 @@ constexpr double MAX_EXPONENT = 8.0;
 /// on noise-free inputs, which keep the paper's weight bitwise. Measured on the benchmark's
 /// scans (docs/numerics.md "Bending weight on noisy shapes"): where the Hessian had to be
 /// smoothed, the bending term still costs correspondence; P = 4 halves c_bend where 4 passes
-/// are needed (the 2D scans at level 7, the 3D scans at level 8).
+/// are needed (the 2D scans at level 7).
 constexpr double DEFAULT_NOISE_BENDING_PASSES = 4;
 
 /// The factor of c_bend for @a noisePasses Hessian smoothing passes: 1 / (1 + noisePasses / P),
