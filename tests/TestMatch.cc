@@ -195,6 +195,25 @@ worldEllipse()
     return ellipseCurve(Vec<2>(3.4, -0.8), 2.6, 1.7, 400);
 }
 
+/// worldEllipse() as a scan of it: each point moved along the ray from its centre by Gaussian
+/// noise of standard deviation @a sigma (world units; Irwin-Hall, 12 uniforms from an LCG
+/// seeded with @a seed, so that every platform gives the same points).
+Surface<2>
+scannedEllipse(double sigma, std::uint64_t seed)
+{
+    Surface<2> scan = worldEllipse();
+    std::uint64_t state = seed;
+    for (Vec<2>& p : scan.points) {
+        double sum = 0;
+        for (int k = 0; k < 12; ++k) {
+            state = state * 6364136223846793005ull + 1442695040888963407ull;
+            sum += double(state >> 11) * 0x1.0p-53;
+        }
+        p += sigma * (sum - 6.0) * (p - Vec<2>(3.4, -0.8)).normalized();
+    }
+    return scan;
+}
+
 } // namespace
 
 TEST(Match, CircleToEllipse2D)
@@ -270,16 +289,7 @@ TEST(Match, NoiseSmoothingActsOnNoisyShapesOnly)
 
     // The ellipse with radial noise of 0.4% of its size (a scan of it): its length reaches half
     // a cell at level 6 or 7, and the result differs from the unsmoothed one.
-    Surface<2> scan = ellipse;
-    std::uint64_t state = 12345;
-    for (Vec<2>& p : scan.points) {
-        double sum = 0; // Irwin-Hall: about N(0, 1)
-        for (int k = 0; k < 12; ++k) {
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            sum += double(state >> 11) * 0x1.0p-53;
-        }
-        p += 0.02 * (sum - 6.0) * (p - Vec<2>(3.4, -0.8)).normalized();
-    }
+    const Surface<2> scan = scannedEllipse(0.02, 12345);
     const MatchResult<2> noisy = match<2>(circle, scan, placement, opts);
     const MatchResult<2> noisyPlain = match<2>(circle, scan, placement, off);
     EXPECT_EQ(noisy.shapeNoise[0], smoothed.shapeNoise[0]);
@@ -320,16 +330,7 @@ TEST(Match, NoiseBendingLowersTheBendingWeightWhereTheHessianIsSmoothed)
 
     // A scan of the ellipse (radial noise of 0.8% of its size): each level's factor follows
     // the target's passes there, below 1 at the fine levels only.
-    Surface<2> scan = ellipse;
-    std::uint64_t state = 777;
-    for (Vec<2>& p : scan.points) {
-        double sum = 0; // Irwin-Hall: about N(0, 1)
-        for (int k = 0; k < 12; ++k) {
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            sum += double(state >> 11) * 0x1.0p-53;
-        }
-        p += 0.04 * (sum - 6.0) * (p - Vec<2>(3.4, -0.8)).normalized();
-    }
+    const Surface<2> scan = scannedEllipse(0.04, 777);
     const MatchResult<2> noisy = match<2>(circle, scan, placement, opts);
     ASSERT_FALSE(noisy.levels.empty());
     const double length = opts.hessianNoiseFactor * noisy.shapeNoise[1];
