@@ -794,8 +794,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             detail::invokeBoth(opts.threaded, buildSource, buildTarget);
             level.surfacePoints = &unitSource.points;
             level.bendingFactor = noiseBendingFactor(
-                std::max(lengthSmoothingPasses(sourceSampler.fields.hessianSmoothingLength, h),
-                         lengthSmoothingPasses(targetSampler.fields.hessianSmoothingLength, h)),
+                pairSmoothingPasses(sourceSampler.fields.hessianSmoothingLength,
+                                    targetSampler.fields.hessianSmoothingLength, h),
                 opts.noiseBendingPasses);
             summary.bendingFactor = level.bendingFactor;
             if (l <= lastLandmarkLevel) {

@@ -15,7 +15,6 @@
 #include <openvdb/openvdb.h>
 #include <tbb/global_control.h>
 
-#include <algorithm>
 #include <array>
 #include <functional>
 #include <optional>
@@ -331,10 +330,10 @@ evaluate(const EnergyOptions& o, const Shape (&in)[2], EnergyReport& r,
     checkInterrupted();
     t0 = Clock::now();
     progress("evaluating the energy");
-    r.bendingFactor = noiseBendingFactor(
-        std::max(lengthSmoothingPasses(sampler1.fields.hessianSmoothingLength, lattice.h()),
-                 lengthSmoothingPasses(sampler2.fields.hessianSmoothingLength, lattice.h())),
-        o.noiseBending);
+    r.bendingFactor =
+        noiseBendingFactor(pairSmoothingPasses(sampler1.fields.hessianSmoothingLength,
+                                               sampler2.fields.hessianSmoothingLength, lattice.h()),
+                           o.noiseBending);
     EnergyParameters levelParams = r.params;
     levelParams.cBend *= r.bendingFactor;
     const Energy<D> energy(lattice, *shape1, *shape2, levelParams, o.kind);

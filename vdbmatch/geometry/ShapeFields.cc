@@ -135,6 +135,12 @@ lengthSmoothingPasses(double s, double h)
 }
 
 int
+pairSmoothingPasses(double sourceLength, double targetLength, double h)
+{
+    return std::max(lengthSmoothingPasses(sourceLength, h), lengthSmoothingPasses(targetLength, h));
+}
+
+int
 hessianSmoothingPasses(const ShapeFieldOptions& opts, double h)
 {
     return std::max(opts.hessianSmoothing, 0) +

@@ -73,6 +73,11 @@ constexpr int MAX_LENGTH_SMOOTHING_PASSES = 64;
 /// min(round(2 s^2 / h^2), MAX_LENGTH_SMOOTHING_PASSES), 0 if s or h is not positive.
 int lengthSmoothingPasses(double s, double h);
 
+/// The larger of lengthSmoothingPasses(@a sourceLength, h) and lengthSmoothingPasses(
+/// @a targetLength, h): the noise smoothing passes of a pair of shapes at voxel size @a h, which
+/// the noise-adaptive bending weight reads (noiseBendingFactor, Parameters.h).
+int pairSmoothingPasses(double sourceLength, double targetLength, double h);
+
 /// Hessian smoothing passes of ShapeFields at voxel size @a h: opts.hessianSmoothing plus
 /// lengthSmoothingPasses(opts.hessianSmoothingLength, h).
 int hessianSmoothingPasses(const ShapeFieldOptions& opts, double h);
