@@ -126,6 +126,25 @@ ls -A "$SCRATCH/m3" | grep -q "\.tmp" && fail "temporary files left in the outpu
 # ---------------------------------------------------------------- identical shapes: phi = Id, converged at once
 check identical-shapes 0 '^vdb_match: converged; .*min det 1,' '' -- "$SPHERE" "$SPHERE" -o "$SCRATCH/same" --levels 3..4 --quiet
 
+# ---------------------------------------------------------------- a small piece beside a shape: warned before the run, in the report
+# figure_b (length 8.56) and a square of side 0.02 (0.9% of it) away from its box (x <= 0.6602,
+# y <= 0.8950): the gap between the boxes is |(1.5 - 0.6602, 1.5 - 0.8950)| = 1.0350.
+{ grep -v '^#' "$FIGURE_B"; printf '\n1.5 1.5\n1.52 1.5\n1.52 1.52\n1.5 1.52\n'; } >"$SCRATCH/fragment.polyline"
+check small-piece-warned 0 'converged' 'warning: the target has 2 pieces, 1 of them small \(4 vertices, 0\.9[0-9]% of its length\), up to 1\.0[34] world units .* away from the largest' -- "$FIGURE_A" "$SCRATCH/fragment.polyline" -o "$SCRATCH/frag" --levels 4..4 --quiet
+grep -q 'pieces' "$SCRATCH/err" && grep -q 'source has' "$SCRATCH/err" && fail "small-piece-warned: the source (one piece) was warned about"
+if "$PYTHON" - "$SCRATCH/frag/report.json" <<'PY'; then echo "ok   small-piece-report"; else fail "small-piece-report"; fi
+import json, sys
+r = json.load(open(sys.argv[1]))
+assert r["source"]["pieces"] == 1 and r["source"]["smallPieces"]["count"] == 0, r["source"]
+t = r["target"]
+assert t["pieces"] == 2 and t["smallPieces"]["count"] == 1 and t["smallPieces"]["vertices"] == 4, t
+assert abs(t["smallPieces"]["share"] - 0.08 / (8.5635 + 0.08)) < 1e-4, t
+assert abs(t["smallPieces"]["farthest"] - 1.0350) < 1e-3, t
+PY
+# One piece each: no warning.
+check one-piece-no-warning 0 'converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/nofrag" --levels 4..4 --quiet
+grep -q 'pieces' "$SCRATCH/err" && fail "one-piece-no-warning: warned about pieces"
+
 # ---------------------------------------------------------------- --config: report.json reproduces its run
 check config-reproduces 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/m3c" --config "$SCRATCH/m3/report.json" --quiet
 count=$((count + 1))

@@ -11,6 +11,7 @@
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/SurfaceExtraction.h>
+#include <vdbmatch/geometry/SurfacePieces.h>
 #include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
@@ -981,7 +982,34 @@ inputJson(const Shape& in)
            {"vertices", surfaceOf<D>(in).points.size()},
            {"elements", surfaceOf<D>(in).elements.size()}};
     if (in.isoValue) j["isoValue"] = *in.isoValue;
+    const SmallPieces pieces = smallPieces(surfaceOf<D>(in));
+    j["pieces"] = pieces.pieces;
+    j["smallPieces"] = Json{{"count", pieces.small},
+                            {"vertices", pieces.smallVertices},
+                            {"share", pieces.smallShare},
+                            {"farthest", pieces.farthest}};
     return j;
+}
+
+/// The warning for a shape with small pieces (geometry/SurfacePieces.h), without the prefix.
+template <int D>
+std::string
+smallPiecesWarning(const Surface<D>& s, const char* name)
+{
+    const SmallPieces p = smallPieces(s);
+    if (p.small == 0) return {};
+    const double diagonal = boundingBox(s).extents().length();
+    std::string where = p.farthest > 0 ? "up to " + fixed("%.3g", p.farthest) + " world units (" +
+                                             fixed("%.1f", 100 * p.farthest / diagonal) +
+                                             "% of its box diagonal) away from the largest"
+                                       : "within the largest piece's box";
+    return std::string("the ") + name + " has " + std::to_string(p.pieces) + " pieces, " +
+           std::to_string(p.small) + " of them small (" + std::to_string(p.smallVertices) +
+           " vertices, " + fixed("%.2f", 100 * p.smallShare) + "% of its " +
+           (D == 3 ? "area" : "length") + "), " + where +
+           ": scan debris or an outlier cluster? The match pulls the other shape towards it" +
+           (p.farthest > 0 ? " and it widens the unit box" : "") +
+           "; remove it if it is not part of the shape";
 }
 
 /// What was written besides deformation.vdb, for report.json.
@@ -1342,6 +1370,10 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
 
     const Surface<D>& source = surfaceOf<D>(in[0]);
     const Surface<D>& target = surfaceOf<D>(in[1]);
+    // On stderr, also with --quiet, before the run: a small piece changes the result.
+    for (const std::string& w :
+         {smallPiecesWarning(source, "source"), smallPiecesWarning(target, "target")})
+        if (!w.empty()) err << "vdb_match: warning: " << w << "\n";
     const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
     // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
     // inputs) have voxels of 2^-level / scale: OpenVDB cannot represent them below its limit.
