@@ -6,7 +6,7 @@
 /// SMALL_PIECE_SHARE of the surface's area in 3D, length in 2D) is rarely part of what a user
 /// means to match: it widens the unit box the shapes are placed in (UnitBox.h), and the match
 /// term pulls part of the other shape towards it. Measured on a 3D scan target with a closed
-/// fragment of 0.16% of its area 5% of the box diagonal away (docs/results.md): the error in
+/// fragment (0.16% of its vertices) 5% of the box diagonal away (docs/results.md): the error in
 /// world units +42%, min det 0.37 -> 0.003, and no part of the target left unreached, so the
 /// target residual (MatchResult::targetResidual) does not tell. The CLI warns from these
 /// figures before the run.
