@@ -150,6 +150,16 @@ check level-12 3 '' 'level must be in \[1, 8\] in 3D, \[1, 11\] in 2D' -- energy
 check dimension-mismatch 3 '' '2D shape but' -- energy "$FIGURE_A" "$SPHERE" --quiet
 check grid-polyline 1 '' '--grid applies to .vdb inputs' -- energy "$FIGURE_A" "$FIGURE_B" --grid surface
 check identical-2d 0 'match +0\.0+e\+00 +0\.0+e\+00' '' -- energy "$FIGURE_A" "$FIGURE_A" --level 5 --quiet
+# A small piece beside the target: warned as by match, and recorded in the JSON's inputs.
+{ grep -v '^#' "$FIGURE_B"; printf '\n1.5 1.5\n1.52 1.5\n1.52 1.52\n1.5 1.52\n'; } >"$SCRATCH/fragment.polyline"
+check small-piece-warned 0 '"smallPieces"' 'warning: the target has 2 pieces, 1 of them small \(4 vertices, 0\.9[0-9]% of its length\)' -- energy "$FIGURE_A" "$SCRATCH/fragment.polyline" --level 5 --json --quiet
+if "$PYTHON" - "$SCRATCH/out" <<'PY'; then echo "ok   small-piece-json"; else fail "small-piece-json"; fi
+import json, sys
+j = json.load(open(sys.argv[1]))
+assert j["source"]["pieces"] == 1 and j["source"]["smallPieces"]["count"] == 0, j["source"]
+assert j["target"]["pieces"] == 2 and j["target"]["smallPieces"]["count"] == 1, j["target"]
+assert j["target"]["smallPieces"]["vertices"] == 4, j["target"]
+PY
 
 echo "$((count - failures))/$count passed"
 [ "$failures" -eq 0 ]

@@ -1,6 +1,8 @@
 /// @file CliSupport.cc
 #include "CliSupport.h"
 
+#include <vdbmatch/geometry/SurfacePieces.h>
+
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cerrno>
@@ -547,6 +549,57 @@ fixed(const char* format, double x)
     char buf[64];
     std::snprintf(buf, sizeof(buf), format, x);
     return buf;
+}
+
+namespace {
+
+template <int D>
+SmallPieces
+piecesOf(const Shape& in, openvdb::BBoxd& box)
+{
+    box = boundingBox(in.get<D>());
+    return smallPieces(in.get<D>());
+}
+
+} // namespace
+
+Json
+shapeJson(const Shape& in)
+{
+    openvdb::BBoxd box;
+    const SmallPieces pieces = in.dim == 2 ? piecesOf<2>(in, box) : piecesOf<3>(in, box);
+    Json j{{"path", in.path},
+           {"format", in.format},
+           {"grid", in.grid},
+           {"vertices", in.dim == 2 ? in.curve.points.size() : in.surface.points.size()},
+           {"elements", in.dim == 2 ? in.curve.elements.size() : in.surface.elements.size()}};
+    if (in.isoValue) j["isoValue"] = *in.isoValue;
+    j["pieces"] = pieces.pieces;
+    j["smallPieces"] = Json{{"count", pieces.small},
+                            {"vertices", pieces.smallVertices},
+                            {"share", pieces.smallShare},
+                            {"farthest", pieces.farthest}};
+    return j;
+}
+
+std::string
+smallPiecesWarning(const Shape& in, const char* role)
+{
+    openvdb::BBoxd box;
+    const SmallPieces p = in.dim == 2 ? piecesOf<2>(in, box) : piecesOf<3>(in, box);
+    if (p.small == 0) return {};
+    const std::string where = p.farthest > 0
+                                  ? "up to " + fixed("%.3g", p.farthest) + " world units (" +
+                                        fixed("%.1f", 100 * p.farthest / box.extents().length()) +
+                                        "% of its box diagonal) away from the largest"
+                                  : "within the largest piece's box";
+    return std::string("the ") + role + " has " + std::to_string(p.pieces) + " pieces, " +
+           std::to_string(p.small) + " of them small (" + std::to_string(p.smallVertices) +
+           " vertices, " + fixed("%.2f", 100 * p.smallShare) + "% of its " +
+           (in.dim == 3 ? "area" : "length") + "), " + where +
+           ": scan debris or an outlier cluster? The match pulls the other shape towards it" +
+           (p.farthest > 0 ? " and it widens the unit box" : "") +
+           "; remove it if it is not part of the shape";
 }
 
 /// One line: the exception message without OpenVDB's "XxxError: " prefix and newlines.

@@ -265,6 +265,13 @@ std::string dumpJson(const Json& j);
 std::string fixed(const char* format, double x);
 /// One line: the exception message without OpenVDB's "XxxError: " prefix and newlines.
 std::string oneLine(const std::string& what);
+/// An input shape in report.json and `energy --json`: path, format, grid, vertices, elements,
+/// isoValue (a density read at an iso-value), pieces and smallPieces (geometry/SurfacePieces.h).
+Json shapeJson(const Shape& in);
+/// The warning, without "vdb_match: warning: ", for a shape with a piece below
+/// SMALL_PIECE_SHARE of its area or length (geometry/SurfacePieces.h); "" if it has none.
+/// @param role  "source" or "target"
+std::string smallPiecesWarning(const Shape& in, const char* role);
 
 } // namespace cli
 } // namespace vdbmatch

@@ -228,23 +228,14 @@ printHuman(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], cons
 void
 printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const EnergyReport& r)
 {
-    auto input = [](const Shape& s) {
-        Json j{{"path", s.path},
-               {"format", s.format},
-               {"grid", s.grid},
-               {"vertices", vertexCount(s)},
-               {"elements", elementCount(s)}};
-        if (s.isoValue) j["isoValue"] = *s.isoValue;
-        return j;
-    };
     auto pair = [](const Real* v) { return Json::array({v[0], v[1]}); };
     Json j;
     j["command"] = "energy";
     j["version"] = VDBMATCH_VERSION;
     j["energy"] = toString(o.kind);
     j["dimension"] = r.dim;
-    j["source"] = input(in[0]);
-    j["target"] = input(in[1]);
+    j["source"] = shapeJson(in[0]);
+    j["target"] = shapeJson(in[1]);
     j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
                           {"scale", r.placement.scale},
                           {"margin", r.placement.margin}};
@@ -397,6 +388,10 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
                                                << in[1].dim << "D");
     }
     r.dim = in[0].dim;
+    // As match: on stderr, also with --quiet (a small piece changes the energy).
+    for (const std::string& w :
+         {smallPiecesWarning(in[0], "source"), smallPiecesWarning(in[1], "target")})
+        if (!w.empty()) err << PROGRAM << ": warning: " << w << "\n";
     if (r.dim == 3 && o.level > MAX_ENERGY_LEVEL_3D) {
         OPENVDB_THROW(openvdb::ValueError,
                       "--level must be in [1, " + std::to_string(MAX_ENERGY_LEVEL_3D) +

@@ -11,7 +11,6 @@
 #include <vdbmatch/geometry/DistanceField.h>
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/SurfaceExtraction.h>
-#include <vdbmatch/geometry/SurfacePieces.h>
 #include <vdbmatch/io/AtomicFile.h>
 #include <vdbmatch/io/DeformationField.h>
 #include <vdbmatch/io/DeformationIO.h>
@@ -972,46 +971,6 @@ surfaceOf(const Shape& in)
     return in.get<D>();
 }
 
-template <int D>
-Json
-inputJson(const Shape& in)
-{
-    Json j{{"path", in.path},
-           {"format", in.format},
-           {"grid", in.grid},
-           {"vertices", surfaceOf<D>(in).points.size()},
-           {"elements", surfaceOf<D>(in).elements.size()}};
-    if (in.isoValue) j["isoValue"] = *in.isoValue;
-    const SmallPieces pieces = smallPieces(surfaceOf<D>(in));
-    j["pieces"] = pieces.pieces;
-    j["smallPieces"] = Json{{"count", pieces.small},
-                            {"vertices", pieces.smallVertices},
-                            {"share", pieces.smallShare},
-                            {"farthest", pieces.farthest}};
-    return j;
-}
-
-/// The warning for a shape with small pieces (geometry/SurfacePieces.h), without the prefix.
-template <int D>
-std::string
-smallPiecesWarning(const Surface<D>& s, const char* name)
-{
-    const SmallPieces p = smallPieces(s);
-    if (p.small == 0) return {};
-    const double diagonal = boundingBox(s).extents().length();
-    std::string where = p.farthest > 0 ? "up to " + fixed("%.3g", p.farthest) + " world units (" +
-                                             fixed("%.1f", 100 * p.farthest / diagonal) +
-                                             "% of its box diagonal) away from the largest"
-                                       : "within the largest piece's box";
-    return std::string("the ") + name + " has " + std::to_string(p.pieces) + " pieces, " +
-           std::to_string(p.small) + " of them small (" + std::to_string(p.smallVertices) +
-           " vertices, " + fixed("%.2f", 100 * p.smallShare) + "% of its " +
-           (D == 3 ? "area" : "length") + "), " + where +
-           ": scan debris or an outlier cluster? The match pulls the other shape towards it" +
-           (p.farthest > 0 ? " and it widens the unit box" : "") +
-           "; remove it if it is not part of the shape";
-}
-
 /// What was written besides deformation.vdb, for report.json.
 struct ExtraOutputs
 {
@@ -1064,8 +1023,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     j["commandLine"] = o.commandLine;
     j["status"] = status;
     j["dimension"] = D;
-    j["source"] = inputJson<D>(in[0]);
-    j["target"] = inputJson<D>(in[1]);
+    j["source"] = shapeJson(in[0]);
+    j["target"] = shapeJson(in[1]);
     j["placement"] = Json{{"worldOrigin", jsonVec(r.placement.worldOrigin)},
                           {"scale", r.placement.scale},
                           {"margin", r.placement.margin}};
@@ -1372,7 +1331,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     const Surface<D>& target = surfaceOf<D>(in[1]);
     // On stderr, also with --quiet, before the run: a small piece changes the result.
     for (const std::string& w :
-         {smallPiecesWarning(source, "source"), smallPiecesWarning(target, "target")})
+         {smallPiecesWarning(in[0], "source"), smallPiecesWarning(in[1], "target")})
         if (!w.empty()) err << "vdb_match: warning: " << w << "\n";
     const UnitBoxPlacement placement = placeInUnitBox(source, target, opts.margin);
     // The grids written in world units (deformation, inverse, Jacobian; deformed.vdb of mesh
