@@ -70,6 +70,9 @@ ok = ok and s["pictures"]["clusterOrder"] and sorted(s["pictures"]["clusterOrder
 for r in s["results"]:
     rep = json.load(open(d + "/jobs/" + r["name"] + "/report.json"))["result"]
     ok = ok and r["residual"] == rep["residual"] and r["targetResidual"] == rep["targetResidual"]
+    rep = json.load(open(d + "/jobs/" + r["name"] + "/report.json"))
+    ok = ok and r["smallPieces"] == {"source": rep["source"]["smallPieces"], "target": rep["target"]["smallPieces"]}
+    ok = ok and r["smallPieces"]["source"]["count"] == 0
 print("ok" if ok else f"bad matrix or summary: {m} {e}")
 PY
 )

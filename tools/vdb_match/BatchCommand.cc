@@ -1012,6 +1012,12 @@ collectCommand(const std::string& outDir, std::ostream& out, std::ostream& err, 
             // Reports written before the target residual (2026-11-28) have none.
             if (res.contains("targetResidual")) e["targetResidual"] = res.at("targetResidual");
             e["minJacobian"] = res.at("minJacobian");
+            // The inputs' small pieces (scan debris), from reports written since 2026-11-28.
+            const Json& rep = it->second;
+            if (rep.contains("source") && rep.at("source").contains("smallPieces")) {
+                e["smallPieces"] = Json{{"source", rep.at("source").at("smallPieces")},
+                                        {"target", rep.at("target").at("smallPieces")}};
+            }
             // |psi o phi - Id| where the reverse job ran too (the consistency command).
             const std::string reverse = stemOf(j.target) + "--" + stemOf(j.source);
             if (reports.count(reverse)) {
