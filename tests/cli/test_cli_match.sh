@@ -141,6 +141,22 @@ assert t["pieces"] == 2 and t["smallPieces"]["count"] == 1 and t["smallPieces"][
 assert abs(t["smallPieces"]["share"] - 0.08 / (8.5635 + 0.08)) < 1e-4, t
 assert abs(t["smallPieces"]["farthest"] - 1.0350) < 1e-3, t
 PY
+# The same for a level set: a cube of side 2 and one of side 0.16 beside it (0.6% of the area), in
+# one grid, as a modeller's VDB with a floater; its zero level set is meshed in two pieces.
+"$PYTHON" - "$SCRATCH/floater.vdb" <<'PY'
+import sys, numpy as np, pyopenvdb as vdb
+def cube(lo, side):
+    p = [[lo[0] + side * (k & 1), lo[1] + side * ((k >> 1) & 1), lo[2] + side * ((k >> 2) & 1)] for k in range(8)]
+    q = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    return np.array(p, float), np.array([t for a, b, c, d in q for t in ((a, b, c), (a, c, d))])
+p1, t1 = cube((-1, -1, -1), 2.0)
+p2, t2 = cube((1.5, -0.08, -0.08), 0.16)
+g = vdb.FloatGrid.createLevelSetFromPolygons(np.vstack([p1, p2]), triangles=np.vstack([t1, t2 + 8]).astype(np.int32),
+                                             transform=vdb.createLinearTransform(voxelSize=0.04), halfWidth=3.0)
+g.name = "surface"
+vdb.write(sys.argv[1], grids=[g])
+PY
+check small-piece-level-set 0 'converged' 'warning: the target has 2 pieces, 1 of them small \([0-9]+ vertices, 0\.[0-9]+% of its area\), up to 0\.[45][0-9]* world units' -- "$SPHERE" "$SCRATCH/floater.vdb" -o "$SCRATCH/floater" --levels 3..4 --quiet
 # One piece each: no warning.
 check one-piece-no-warning 0 'converged' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/nofrag" --levels 4..4 --quiet
 grep -q 'pieces' "$SCRATCH/err" && fail "one-piece-no-warning: warned about pieces"
