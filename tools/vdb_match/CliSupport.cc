@@ -553,12 +553,10 @@ fixed(const char* format, double x)
 
 namespace {
 
-template <int D>
 SmallPieces
-piecesOf(const Shape& in, openvdb::BBoxd& box)
+piecesOf(const Shape& in)
 {
-    box = boundingBox(in.get<D>());
-    return smallPieces(in.get<D>());
+    return in.dim == 2 ? smallPieces(in.get<2>()) : smallPieces(in.get<3>());
 }
 
 } // namespace
@@ -566,8 +564,7 @@ piecesOf(const Shape& in, openvdb::BBoxd& box)
 Json
 shapeJson(const Shape& in)
 {
-    openvdb::BBoxd box;
-    const SmallPieces pieces = in.dim == 2 ? piecesOf<2>(in, box) : piecesOf<3>(in, box);
+    const SmallPieces pieces = piecesOf(in);
     Json j{{"path", in.path},
            {"format", in.format},
            {"grid", in.grid},
@@ -585,9 +582,9 @@ shapeJson(const Shape& in)
 std::string
 smallPiecesWarning(const Shape& in, const char* role)
 {
-    openvdb::BBoxd box;
-    const SmallPieces p = in.dim == 2 ? piecesOf<2>(in, box) : piecesOf<3>(in, box);
+    const SmallPieces p = piecesOf(in);
     if (p.small == 0) return {};
+    const openvdb::BBoxd box = in.dim == 2 ? boundingBox(in.get<2>()) : boundingBox(in.get<3>());
     const std::string where = p.farthest > 0
                                   ? "up to " + fixed("%.3g", p.farthest) + " world units (" +
                                         fixed("%.1f", 100 * p.farthest / box.extents().length()) +
