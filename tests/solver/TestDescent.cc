@@ -225,6 +225,18 @@ private:
     bool mFired = false;
 };
 
+/// 2D defaults at levels @a first..@a last without descent steps: every level reports its terms
+/// at the prolongated identity, so runs that differ in a weight differ only in that term.
+MultiscaleOptions
+noStepOptions(int first, int last)
+{
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    opts.minLevel = first;
+    opts.maxLevel = last;
+    opts.descent.maxIterations = 0;
+    return opts;
+}
+
 /// Level by level, @a b's term @a scaled is @a scale[i] times @a a's (both halves, to 1e-12) and
 /// the other three terms are bitwise @a a's: two runs without descent steps that differ in one
 /// weight of one term.
@@ -367,10 +379,7 @@ TEST(Descent, CoarseMembraneFactorWeighsTheMembraneBelowTheFinestLevelOnly)
 {
     // No descent steps: every level reports its terms at the prolongated identity, so the two
     // runs see the same deformations and differ only in the weights (MultiscaleOptions::energyAt).
-    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
-    opts.minLevel = 4;
-    opts.maxLevel = 6;
-    opts.descent.maxIterations = 0;
+    MultiscaleOptions opts = noStepOptions(4, 6);
     Problem<2> problem(opts.energy);
     const auto run = [&](Real factor) {
         MultiscaleOptions o = opts;
@@ -390,10 +399,7 @@ TEST(Descent, LevelBendingFactorWeighsTheBendingTermOfItsLevelOnly)
 {
     // Level::bendingFactor (match()'s noise-adaptive bending weight) multiplies c_bend at its
     // level and leaves the other terms and levels alone. No descent steps, as above.
-    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
-    opts.minLevel = 4;
-    opts.maxLevel = 6;
-    opts.descent.maxIterations = 0;
+    MultiscaleOptions opts = noStepOptions(4, 6);
     Problem<2> problem(opts.energy);
     const auto run = [&](Real factorAtLevel5) {
         const LevelBuilder<2> dense = problem.denseLevels();
@@ -475,11 +481,8 @@ TEST(Descent, CoarseSigmaFactorWidensTheBandBelowTheFinestLevelOnly)
 TEST(Descent, MembraneSaturationActsAtTheFirstLevelsOnly)
 {
     // As above: no descent steps, so the runs differ only in the energy of each level.
-    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    MultiscaleOptions opts = noStepOptions(4, 7);
     EXPECT_EQ(opts.energy.membraneSaturation, 0.0); // tab:parameters: the paper's W
-    opts.minLevel = 4;
-    opts.maxLevel = 7;
-    opts.descent.maxIterations = 0;
     Problem<2> problem(opts.energy);
     const auto run = [&](Real s, int levels) {
         MultiscaleOptions o = opts;
