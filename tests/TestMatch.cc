@@ -302,6 +302,54 @@ TEST(Match, NoiseSmoothingActsOnNoisyShapesOnly)
     EXPECT_LT(noisy.residual.meanUnit, 0.5 * std::ldexp(1.0, -7));
 }
 
+/// The lattice reading of the noise (MatchOptions::hessianLatticeNoiseFactor), a 3D default: a
+/// noise-free pair runs bitwise as without it; a target whose noise is correlated over a few
+/// vertices takes its smoothing length from the lattice, where the vertex reading alone would
+/// leave level 6 unsmoothed.
+TEST(Match, LatticeNoiseSetsTheLengthOfCorrelatedNoise3D)
+{
+    EXPECT_EQ(MatchOptions::defaults(3).hessianLatticeNoiseFactor,
+              LATTICE_NOISE_SMOOTHING_FACTOR_3D);
+    EXPECT_EQ(MatchOptions::defaults(2).hessianLatticeNoiseFactor, 0.0);
+    EXPECT_EQ(MatchOptions::paper(3).hessianLatticeNoiseFactor, 0.0);
+    const Surface<3> sphere = ellipsoidMesh(Vec<3>(0, 0, 0), Vec<3>(1, 1, 1), 40, 80);
+    const Vec<3> centre(0.25, 0.1, -0.1);
+    const Surface<3> ellipsoid = ellipsoidMesh(centre, Vec<3>(1.3, 0.95, 0.8), 40, 80);
+    MatchOptions opts = MatchOptions::defaults(3);
+    opts.multiscale.minLevel = 3;
+    opts.multiscale.maxLevel = 4;
+    const UnitBoxPlacement placement = placeInUnitBox(sphere, ellipsoid, opts.margin);
+    MatchOptions off = opts;
+    off.hessianLatticeNoiseFactor = 0;
+    const MatchResult<3> clean = match<3>(sphere, ellipsoid, placement, opts);
+    const MatchResult<3> cleanOff = match<3>(sphere, ellipsoid, placement, off);
+    for (int s = 0; s < 2; ++s) {
+        EXPECT_GT(clean.latticeNoise[s], 0.0);
+        EXPECT_EQ(cleanOff.latticeNoise[s], 0.0);
+        // No pass at any level match() accepts in 3D (the finest, 8, smooths from h/2 up).
+        EXPECT_LT(clean.smoothingLength[s], 0.5 * std::ldexp(1.0, -8));
+    }
+    ASSERT_EQ(clean.displacement.cols(), cleanOff.displacement.cols());
+    EXPECT_TRUE(clean.displacement == cleanOff.displacement);
+
+    // The ellipsoid with radial noise of 0.25% of the unit box correlated over about 4 edges
+    // (edges ~0.003 of the box: the level-7 lattice spans two or three of them).
+    const double sigma = 0.0025 / placement.scale;
+    const Surface<3> scan = test::correlatedNoise(
+        ellipsoidMesh(centre, Vec<3>(1.3, 0.95, 0.8), 200, 400), centre, sigma, 4, 21);
+    opts.multiscale.maxLevel = 3;
+    opts.multiscale.descent.maxIterations = 0; // the readings only
+    const MatchResult<3> noisy = match<3>(sphere, scan, placement, opts);
+    std::printf("vertex noise %.3g, lattice %.3g, length %.3g\n", noisy.shapeNoise[1],
+                noisy.latticeNoise[1], noisy.smoothingLength[1]);
+    EXPECT_EQ(noisy.smoothingLength[1], LATTICE_NOISE_SMOOTHING_FACTOR_3D * noisy.latticeNoise[1]);
+    const double h6 = std::ldexp(1.0, -6);
+    EXPECT_LT(NOISE_SMOOTHING_LENGTH_FACTOR * noisy.shapeNoise[1], 0.5 * h6);
+    EXPECT_GE(noisy.smoothingLength[1], 0.5 * h6);
+    // The source is as clean as before.
+    EXPECT_EQ(noisy.latticeNoise[0], clean.latticeNoise[0]);
+}
+
 TEST(Match, NoiseBendingLowersTheBendingWeightWhereTheHessianIsSmoothed)
 {
     // The factor: 1 / (1 + n / P), exactly 1 without passes or with P = 0 (off).

@@ -138,6 +138,7 @@ MatchOptions::defaults(int dim)
         dim == 2 ? DEFAULT_INNER_DISTANCE_WEIGHT_2D : DEFAULT_INNER_DISTANCE_WEIGHT_3D;
     opts.secondPath = true;
     opts.hessianNoiseFactor = NOISE_SMOOTHING_LENGTH_FACTOR;
+    opts.hessianLatticeNoiseFactor = dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0;
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
     return opts;
 }
@@ -184,6 +185,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: hessianNoiseFactor must be finite and >= 0, got "
                           << hessianNoiseFactor);
+    }
+    if (!(hessianLatticeNoiseFactor >= 0) || !std::isfinite(hessianLatticeNoiseFactor)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: hessianLatticeNoiseFactor must be finite and >= 0, got "
+                          << hessianLatticeNoiseFactor);
     }
     if (!(noiseBendingPasses >= 0) || !std::isfinite(noiseBendingPasses)) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -767,12 +773,26 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     ShapeSamplerCache<D> sourceTiers, targetTiers;
     // Each shape's Hessian smoothed over a length from its own noise (geometry/SurfaceNoise.h).
     ShapeSamplerOptions sourceSampler = opts.sampler, targetSampler = opts.sampler;
+    // The length is the larger of the vertex and the lattice readings' (docs/numerics.md
+    // "Correlated noise"): white vertex noise reads higher on the first, noise correlated over
+    // a few vertices on the second.
     if (opts.hessianNoiseFactor > 0) {
-        result.shapeNoise = {surfaceNoise(unitSource), surfaceNoise(unitTarget)};
-        sourceSampler.fields.hessianSmoothingLength =
-            opts.hessianNoiseFactor * result.shapeNoise[0];
-        targetSampler.fields.hessianSmoothingLength =
-            opts.hessianNoiseFactor * result.shapeNoise[1];
+        NoiseReading noise[2];
+        detail::invokeBoth(
+            opts.threaded,
+            [&] {
+                noise[0] = readNoise(unitSource, opts.hessianNoiseFactor,
+                                     opts.hessianLatticeNoiseFactor, opts.threaded);
+            },
+            [&] {
+                noise[1] = readNoise(unitTarget, opts.hessianNoiseFactor,
+                                     opts.hessianLatticeNoiseFactor, opts.threaded);
+            });
+        result.shapeNoise = {noise[0].vertex, noise[1].vertex};
+        result.latticeNoise = {noise[0].lattice, noise[1].lattice};
+        result.smoothingLength = {noise[0].length, noise[1].length};
+        sourceSampler.fields.hessianSmoothingLength = noise[0].length;
+        targetSampler.fields.hessianSmoothingLength = noise[1].length;
     }
 
     const multiscale::ContextLevelBuilder<D> builder =

@@ -307,6 +307,14 @@ struct MatchOptions
     /// get no pass and run bitwise as without. >= 0; 0: off (paper()); defaults():
     /// NOISE_SMOOTHING_LENGTH_FACTOR.
     double hessianNoiseFactor = 0;
+    /// The lattice reading of the noise, an addition to the paper (docs/numerics.md
+    /// "Correlated noise"): each shape's Hessian smoothing length is the larger of
+    /// hessianNoiseFactor times its vertex noise and this factor times
+    /// latticeSurfaceNoise() at LATTICE_NOISE_LEVEL (geometry/SurfaceNoise.h), which reads
+    /// noise correlated over a few vertices at its amplitude where the vertex reading falls.
+    /// Acts only with hessianNoiseFactor > 0. >= 0; 0: off (paper()); defaults():
+    /// LATTICE_NOISE_SMOOTHING_FACTOR_3D in 3D, 0 in 2D.
+    double hessianLatticeNoiseFactor = 0;
     /// Bending weight on noisy shapes, an addition to the paper: at each level c_bend is
     /// multiplied by noiseBendingFactor(n, noiseBendingPasses), n the larger of the two shapes'
     /// noise smoothing passes there (lengthSmoothingPasses of their Hessian smoothing lengths,
@@ -478,9 +486,16 @@ template <int D> struct MatchResult
     AutoLandmarkSummary autoLandmarks;
     InnerDistanceSummary innerDistance;
     SecondPathSummary secondPath;
-    /// surfaceNoise() of the placed source and target (Omega units); each shape's Hessian
-    /// smoothing length is MatchOptions::hessianNoiseFactor times it. Zeros when the factor is 0.
+    /// surfaceNoise() of the placed source and target (Omega units). Zeros when
+    /// MatchOptions::hessianNoiseFactor is 0.
     std::array<double, 2> shapeNoise{{0.0, 0.0}};
+    /// latticeSurfaceNoise() of the placed source and target at LATTICE_NOISE_LEVEL (Omega
+    /// units). Zeros when MatchOptions::hessianNoiseFactor or hessianLatticeNoiseFactor is 0.
+    std::array<double, 2> latticeNoise{{0.0, 0.0}};
+    /// Each shape's Hessian smoothing length (ShapeFieldOptions::hessianSmoothingLength, Omega
+    /// units): the larger of hessianNoiseFactor * shapeNoise and hessianLatticeNoiseFactor *
+    /// latticeNoise.
+    std::array<double, 2> smoothingLength{{0.0, 0.0}};
     double minJacobian = 0; ///< min det D phi over the simplices of the last lattice
     double totalSeconds = 0;
 

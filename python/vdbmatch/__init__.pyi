@@ -71,6 +71,7 @@ def match(
     tau: float | None = None,
     hessian_smoothing: int | None = None,
     noise_smoothing: float | None = None,
+    lattice_noise_smoothing: float | None = None,
     noise_bending: float | None = None,
     landmarks: tuple[Path | npt.ArrayLike, Path | npt.ArrayLike] | None = None,
     landmark_weight: float | None = None,
@@ -128,6 +129,7 @@ def energy(
     membrane_saturation: float | None = None,
     hessian_smoothing: int | None = None,
     noise_smoothing: float | None = None,
+    lattice_noise_smoothing: float | None = None,
     noise_bending: float | None = None,
     threads: int | None = None,
 ) -> dict[str, Any]: ...

@@ -46,7 +46,7 @@ initial = m["levels"][0]["initialEnergy"]
 assert abs(e["total"] - initial) <= 1e-9 * abs(initial), (e["total"], initial)
 assert e["placement"] == m["placement"], (e["placement"], m["placement"])
 for key in ("cMatch", "cMem", "cBend", "cVol", "q", "theta", "membraneSaturation", "hessianSmoothing",
-            "noiseSmoothing", "noiseBending"):
+            "noiseSmoothing", "latticeNoiseSmoothing", "noiseBending"):
     assert e["parameters"][key] == m["parameters"][key], (key, e["parameters"], m["parameters"])
 PY
         echo "ok   $name"

@@ -283,7 +283,13 @@ reports = [json.load(open(d + "/report.json")) for d in sys.argv[1:]]
 assert "noise" not in reports[0], reports[0].keys()
 noise = reports[2]["noise"]
 assert 0 < noise["source"] < 1e-3 and 0 < noise["target"] < 1e-3, noise
-assert noise["smoothingLength"][1] == default["noiseSmoothing"] * noise["target"], noise
+# ... and, in 3D, from the noise a lattice of h = 1/128 sees (an addition): the length is the
+# larger of the two readings' (these noise-free level sets read ~1e-4 on the lattice)
+assert paper["latticeNoiseSmoothing"] == 0 and default["latticeNoiseSmoothing"] == 3.5, (paper, default)
+assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
+for i, shape in enumerate(("source", "target")):
+    assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],
+                                              default["latticeNoiseSmoothing"] * noise["lattice"][i]), noise
 # the bending weight lowered where the noise smoothing acts (an addition): off in the paper's
 # preset; these noise-free level sets get no pass, so every level keeps the paper's c_bend
 assert paper["noiseBending"] == 0 and default["noiseBending"] == 4, (paper, default)
@@ -291,6 +297,7 @@ for r in reports:
     assert [l["bendingFactor"] for l in r["levels"]] == [1] * len(r["levels"]), r["levels"]
 PY
 check noise-smoothing-negative 1 '' '--noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-smoothing -1 --quiet
+check lattice-noise-smoothing-negative 1 '' '--lattice-noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --lattice-noise-smoothing -1 --quiet
 check noise-bending-negative 1 '' '--noise-bending must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-bending -1 --quiet
 # A report of a version before the noise smoothing reproduces its run without it.
 "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_noise.json"
@@ -302,6 +309,11 @@ if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); assert r["p
 check noise-bending-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/bold" --config "$SCRATCH/old_bending.json" --levels 3..3 --quiet
 count=$((count + 1))
 if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["noiseBending"] == 0 and p["noiseSmoothing"] > 0, p' "$SCRATCH/bold/report.json"; then echo "ok   noise-bending-old-report"; else fail "noise-bending-old-report"; fi
+# ... and one before the lattice reading of the noise, with the vertex reading alone.
+"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("latticeNoiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_lattice.json"
+check lattice-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/lold" --config "$SCRATCH/old_lattice.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; n = r["noise"]; assert p["latticeNoiseSmoothing"] == 0 and n["lattice"] == [0, 0] and n["smoothingLength"][1] == p["noiseSmoothing"] * n["target"], r' "$SCRATCH/lold/report.json"; then echo "ok   lattice-noise-old-report"; else fail "lattice-noise-old-report"; fi
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
@@ -318,6 +330,8 @@ import json, sys
 reports = [json.load(open(d + "/report.json")) for d in sys.argv[1:]]
 default, paper, given = (r["parameters"] for r in reports)
 assert default["membraneSaturation"] == 0, default
+# the lattice reading of the noise is a 3D default: a 2D run has the vertex reading alone
+assert default["latticeNoiseSmoothing"] == 0 and reports[0]["noise"]["lattice"] == [0, 0], reports[0]
 assert default["metricTauFactor"] == 2 and paper["metricTauFactor"] == 0.5 and given["metricTauFactor"] == 0.5, (default, paper, given)
 # the metric changes the path, not the energy: the same energy at the identity, another end
 e = [r["levels"][0] for r in reports]

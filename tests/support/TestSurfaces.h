@@ -1,14 +1,16 @@
 /// @file TestSurfaces.h
-/// @brief Small explicit surfaces for tests: a unit cube, a UV sphere, circles and squares, and a
-/// scratch directory per test.
+/// @brief Small explicit surfaces for tests: a unit cube, a UV sphere, circles and squares, noise
+/// correlated over a few vertices, and a scratch directory per test.
 #pragma once
 
 #include <vdbmatch/geometry/Surface.h>
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <system_error>
 #include <unistd.h>
@@ -16,6 +18,49 @@
 
 namespace vdbmatch {
 namespace test {
+
+/// Moves every point of @a s along its radial direction from @a centre by a Gaussian field of
+/// standard deviation sigma correlated over about @a passes edges: white N(0, 1) per vertex,
+/// then @a passes times replaced by its mean over the vertex and its neighbours, then scaled
+/// to standard deviation sigma. Seeded.
+template <int D>
+inline Surface<D>
+correlatedNoise(Surface<D> s, const Vec<D>& centre, double sigma, int passes, unsigned seed)
+{
+    std::mt19937 random(seed);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    std::vector<double> z(s.points.size());
+    for (double& v : z)
+        v = normal(random);
+    std::vector<std::vector<int>> neighbours(s.points.size());
+    for (const auto& e : s.elements)
+        for (int a = 0; a < D; ++a)
+            for (int b = 0; b < D; ++b)
+                if (a != b) neighbours[size_t(e[a])].push_back(e[b]);
+    for (auto& n : neighbours) {
+        std::sort(n.begin(), n.end());
+        n.erase(std::unique(n.begin(), n.end()), n.end());
+    }
+    for (int k = 0; k < passes; ++k) {
+        std::vector<double> next(z.size());
+        for (size_t v = 0; v < z.size(); ++v) {
+            double sum = z[v];
+            for (int w : neighbours[v])
+                sum += z[size_t(w)];
+            next[v] = sum / double(1 + neighbours[v].size());
+        }
+        z.swap(next);
+    }
+    double mean = 0, square = 0;
+    for (double v : z)
+        mean += v / double(z.size());
+    for (double v : z)
+        square += (v - mean) * (v - mean) / double(z.size());
+    for (size_t v = 0; v < z.size(); ++v)
+        s.points[v] +=
+            sigma * (z[v] - mean) / std::sqrt(square) * (s.points[v] - centre).normalized();
+    return s;
+}
 
 /// A closed polygon with n vertices on the ellipse centre + (a cos t, b sin t), counter-clockwise.
 inline Surface<2>

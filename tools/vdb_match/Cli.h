@@ -15,6 +15,7 @@
 #pragma once
 
 #include <vdbmatch/Parameters.h>
+#include <vdbmatch/geometry/SurfaceNoise.h>
 #include <vdbmatch/geometry/UnitBox.h>
 
 #include <atomic>
@@ -63,6 +64,7 @@ struct EnergyOptions
     double membraneSaturation = 0; ///< --membrane-saturation (0: the paper's membrane)
     int hessianSmoothing = 0;      ///< ShapeFieldOptions::hessianSmoothing
     double noiseSmoothing = 0;     ///< --noise-smoothing (MatchOptions::hessianNoiseFactor)
+    std::optional<double> latticeNoiseSmoothing;        ///< --lattice-noise-smoothing (as match's)
     double noiseBending = DEFAULT_NOISE_BENDING_PASSES; ///< --noise-bending (as match's)
     int threads = 0;                                    ///< 0: all cores
     bool json = false;
@@ -71,6 +73,8 @@ struct EnergyOptions
     /// The energy parameters for inputs of dimension @a dim: the options given over
     /// EnergyParameters::defaults(dim).
     EnergyParameters parameters(int dim) const;
+    /// --lattice-noise-smoothing, or match's default for @a dim.
+    double latticeNoiseFactor(int dim) const;
 };
 
 /// Parses the arguments that follow `energy` (argv[first..argc)).

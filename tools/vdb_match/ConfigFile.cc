@@ -34,6 +34,7 @@ configKeys()
         {"tau", "--tau"},
         {"hessianSmoothing", "--hessian-smoothing"},
         {"noiseSmoothing", "--noise-smoothing"},
+        {"latticeNoiseSmoothing", "--lattice-noise-smoothing"},
         {"noiseBending", "--noise-bending"},
         {"minLevel", "--min-level"},
         {"maxLevel", "--max-level"},
@@ -183,6 +184,12 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
         !params.contains("noiseSmoothing")) {
         settings.push_back({"noiseSmoothing", "--noise-smoothing", "0"});
+    }
+    // ... and one before the lattice reading of the noise (no latticeNoiseSmoothing) had the
+    // vertex reading alone.
+    if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
+        !params.contains("latticeNoiseSmoothing")) {
+        settings.push_back({"latticeNoiseSmoothing", "--lattice-noise-smoothing", "0"});
     }
     // ... and one before the noise-adaptive bending weight (no noiseBending) kept c_bend.
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&

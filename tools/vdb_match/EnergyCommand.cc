@@ -40,6 +40,13 @@ EnergyOptions::parameters(int dim) const
     return p;
 }
 
+double
+EnergyOptions::latticeNoiseFactor(int dim) const
+{
+    return latticeNoiseSmoothing ? *latticeNoiseSmoothing
+                                 : (dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0);
+}
+
 namespace {
 
 /// Finest --level of `energy`: its lattice is dense (6 * 8^8 = 100 M simplices at 8 in 3D,
@@ -142,6 +149,14 @@ energyOptionTable()
              formatNumber(d.noiseSmoothing) + "; match's default is " +
              formatNumber(NOISE_SMOOTHING_LENGTH_FACTOR) + ")",
          [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
+        {"--lattice-noise-smoothing", "G", "Energy (paper tab:parameters)",
+         "an addition to the paper: with --noise-smoothing, smooth each shape's Hessian over at "
+         "least G times the noise a lattice of h = 1/128 sees on it, as match does, >= 0, 0: "
+         "off (default " +
+             formatNumber(LATTICE_NOISE_SMOOTHING_FACTOR_3D) + " in 3D, 0 in 2D, as match's)",
+         [](O& o, const std::string& v) {
+             o.latticeNoiseSmoothing = parseDouble("--lattice-noise-smoothing", v);
+         }},
         {"--noise-bending", "X", "Energy (paper tab:parameters)",
          "an addition to the paper: with --noise-smoothing, weigh the bending term by c_bend / "
          "(1 + n/X) for the larger number n of noise smoothing passes of the two shapes at "
@@ -176,8 +191,8 @@ struct EnergyReport
     std::size_t simplices = 0;
     EnergyTerms terms;
     double total = 0;
-    std::array<double, 2> noise{{0.0, 0.0}}; ///< surfaceNoise() of the placed shapes
-    double bendingFactor = 1;                ///< noiseBendingFactor() at the level
+    std::array<NoiseReading, 2> noise; ///< readNoise() of the placed shapes
+    double bendingFactor = 1;          ///< noiseBendingFactor() at the level
     Timings time;
 };
 
@@ -242,13 +257,14 @@ printJson(std::ostream& out, const EnergyOptions& o, const Shape (&in)[2], const
     j["parameters"] = energyParametersJson(r.params);
     j["parameters"]["hessianSmoothing"] = o.hessianSmoothing;
     j["parameters"]["noiseSmoothing"] = o.noiseSmoothing;
+    j["parameters"]["latticeNoiseSmoothing"] = o.latticeNoiseFactor(r.dim);
     j["parameters"]["noiseBending"] = o.noiseBending;
     j["bendingFactor"] = r.bendingFactor;
     if (o.noiseSmoothing > 0) {
-        j["noise"] = Json{
-            {"source", r.noise[0]},
-            {"target", r.noise[1]},
-            {"smoothingLength", {o.noiseSmoothing * r.noise[0], o.noiseSmoothing * r.noise[1]}}};
+        j["noise"] = Json{{"source", r.noise[0].vertex},
+                          {"target", r.noise[1].vertex},
+                          {"lattice", {r.noise[0].lattice, r.noise[1].lattice}},
+                          {"smoothingLength", {r.noise[0].length, r.noise[1].length}}};
     }
     j["level"] = o.level;
     j["h"] = r.h;
@@ -304,9 +320,10 @@ evaluate(const EnergyOptions& o, const Shape (&in)[2], EnergyReport& r,
     samplerOptions.fields.tau = r.params.tau;
     samplerOptions.fields.hessianSmoothing = o.hessianSmoothing;
     ShapeSamplerOptions sampler1 = samplerOptions, sampler2 = samplerOptions;
-    if (o.noiseSmoothing > 0) r.noise = {surfaceNoise(unit[0]), surfaceNoise(unit[1])};
-    sampler1.fields.hessianSmoothingLength = o.noiseSmoothing * r.noise[0];
-    sampler2.fields.hessianSmoothingLength = o.noiseSmoothing * r.noise[1];
+    for (int s = 0; s < 2; ++s)
+        r.noise[size_t(s)] = readNoise(unit[s], o.noiseSmoothing, o.latticeNoiseFactor(D));
+    sampler1.fields.hessianSmoothingLength = r.noise[0].length;
+    sampler2.fields.hessianSmoothingLength = r.noise[1].length;
     const typename FieldSampler<D>::ConstPtr shape1 =
         buildShapeSampler<D>(unit[0], o.level, sampler1);
     checkInterrupted();
@@ -347,6 +364,11 @@ runEnergy(const EnergyOptions& o, std::ostream& out, std::ostream& err)
     };
     if (!(o.noiseSmoothing >= 0) || !std::isfinite(o.noiseSmoothing)) {
         OPENVDB_THROW(openvdb::ValueError, "--noise-smoothing must be a finite number >= 0");
+    }
+    if (o.latticeNoiseSmoothing &&
+        (!(*o.latticeNoiseSmoothing >= 0) || !std::isfinite(*o.latticeNoiseSmoothing))) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "--lattice-noise-smoothing must be a finite number >= 0");
     }
     if (!(o.noiseBending >= 0) || !std::isfinite(o.noiseBending)) {
         OPENVDB_THROW(openvdb::ValueError, "--noise-bending must be a finite number >= 0");

@@ -78,8 +78,9 @@ struct MatchCliOptions
     EnergyKind kind = EnergyKind::Symmetric;
     double margin = DEFAULT_UNIT_BOX_MARGIN;
     int hessianSmoothing = 0;
-    std::optional<double> noiseSmoothing; ///< --noise-smoothing (default per preset)
-    std::optional<double> noiseBending;   ///< --noise-bending (default per preset)
+    std::optional<double> noiseSmoothing;        ///< --noise-smoothing (default per preset)
+    std::optional<double> latticeNoiseSmoothing; ///< --lattice-noise-smoothing (per preset)
+    std::optional<double> noiseBending;          ///< --noise-bending (default per preset)
     double refinementMargin = DEFAULT_REFINEMENT_MARGIN_CELLS;
     int maxIterations = MatchOptions::defaults(3).multiscale.descent.maxIterations;
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
@@ -239,7 +240,9 @@ noiseLine(const MatchResult<D>& r, const MatchOptions& opts)
     for (int s = 0; s < 2; ++s) {
         line += std::string(s ? ";" : "") + " " + names[s] + " noise " +
                 fixed("%.2e", r.shapeNoise[s]) + " of the unit box";
-        const double length = opts.hessianNoiseFactor * r.shapeNoise[s];
+        if (opts.hessianLatticeNoiseFactor > 0)
+            line += " (lattice " + fixed("%.2e", r.latticeNoise[s]) + ")";
+        const double length = r.smoothingLength[s];
         int from = 0;
         for (int l = opts.multiscale.maxLevel; l >= opts.multiscale.minLevel; --l)
             if (lengthSmoothingPasses(length, std::ldexp(1.0, -l)) > 0) from = l;
@@ -490,6 +493,18 @@ matchOptionTable()
              "; --preset paper: 0). report.json \"noise\" gives each shape's noise and length "
              "(docs/numerics.md)",
          [](O& o, const std::string& v) { o.noiseSmoothing = parseDouble("--noise-smoothing", v); }},
+        {"--lattice-noise-smoothing", "G", "Energy (paper tab:parameters)",
+         "an addition to the paper: with --noise-smoothing, smooth each shape's Hessian over at "
+         "least G times the noise a lattice of h = 1/128 sees on it (median change of the "
+         "distance Hessian under one smoothing pass, times h^2), which reads noise correlated "
+         "over a few vertices at its amplitude where the vertex noise reads it low; >= 0, 0: off "
+         "(default " +
+             formatNumber(LATTICE_NOISE_SMOOTHING_FACTOR_3D) +
+             " in 3D, 0 in 2D; --preset paper: 0). report.json \"noise\" gives each shape's reading "
+             "(docs/numerics.md \"Correlated noise\")",
+         [](O& o, const std::string& v) {
+             o.latticeNoiseSmoothing = parseDouble("--lattice-noise-smoothing", v);
+         }},
         {"--noise-bending", "X", "Energy (paper tab:parameters)",
          "an addition to the paper: at a level where --noise-smoothing gives a shape's Hessian n "
          "passes (the larger n of the two shapes), weigh the bending term by c_bend / (1 + n/X): a "
@@ -786,6 +801,9 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
     if (o.noiseSmoothing && !(*o.noiseSmoothing >= 0 && std::isfinite(*o.noiseSmoothing)))
         throw UsageError("--noise-smoothing must be a finite number >= 0");
+    if (o.latticeNoiseSmoothing &&
+        !(*o.latticeNoiseSmoothing >= 0 && std::isfinite(*o.latticeNoiseSmoothing)))
+        throw UsageError("--lattice-noise-smoothing must be a finite number >= 0");
     if (o.noiseBending && !(*o.noiseBending >= 0 && std::isfinite(*o.noiseBending)))
         throw UsageError("--noise-bending must be a finite number >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
@@ -1053,6 +1071,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     params.update(
         Json{{"hessianSmoothing", opts.sampler.fields.hessianSmoothing},
              {"noiseSmoothing", opts.hessianNoiseFactor},
+             {"latticeNoiseSmoothing", opts.hessianLatticeNoiseFactor},
              {"noiseBending", opts.noiseBendingPasses},
              {"minLevel", opts.coarsestLevel > 0 ? opts.coarsestLevel : opts.multiscale.minLevel},
              {"maxLevel", opts.multiscale.maxLevel},
@@ -1179,9 +1198,8 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
     if (opts.hessianNoiseFactor > 0) {
         j["noise"] = Json{{"source", r.shapeNoise[0]},
                           {"target", r.shapeNoise[1]},
-                          {"smoothingLength",
-                           {opts.hessianNoiseFactor * r.shapeNoise[0],
-                            opts.hessianNoiseFactor * r.shapeNoise[1]}}};
+                          {"lattice", {r.latticeNoise[0], r.latticeNoise[1]}},
+                          {"smoothingLength", {r.smoothingLength[0], r.smoothingLength[1]}}};
     }
     if (r.secondPath.requested) {
         const SecondPathSummary& sp = r.secondPath;
@@ -1283,6 +1301,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.refinementMarginCells = o.refinementMargin;
     opts.sampler.fields.hessianSmoothing = o.hessianSmoothing;
     if (o.noiseSmoothing) opts.hessianNoiseFactor = *o.noiseSmoothing;
+    if (o.latticeNoiseSmoothing) opts.hessianLatticeNoiseFactor = *o.latticeNoiseSmoothing;
     if (o.noiseBending) opts.noiseBendingPasses = *o.noiseBending;
     // --landmarks A B: the same number of points in each, in world units of the inputs.
     if (!o.landmarkFiles.empty()) {

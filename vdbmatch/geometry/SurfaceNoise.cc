@@ -1,8 +1,14 @@
 /// @file SurfaceNoise.cc
-/// @brief The vertex noise of a surface: median normal part of the umbrella vector's change.
+/// @brief The noise of a surface: the vertex reading (median normal part of the umbrella
+///        vector's change) and the lattice reading (median roughness of the Hessian of its
+///        signed distance on a lattice).
 #include "SurfaceNoise.h"
 
+#include <vdbmatch/geometry/DistanceField.h>
+
 #include <Eigen/Eigenvalues>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -109,7 +115,135 @@ noise(const Surface<D>& s)
     return *middle;
 }
 
+/// Hessian of d at node c by second differences (the off-diagonal terms centred); false if a
+/// node of the stencil is outside the band.
+template <int D>
+bool
+hessianAt(const openvdb::FloatGrid::ConstAccessor& acc, const openvdb::Coord& c, double h,
+          Mat<D>& hessian)
+{
+    auto value = [&](int dx, int dy, int dz, double& out) {
+        float v;
+        if (!acc.probeValue(c.offsetBy(dx, dy, dz), v)) return false;
+        out = double(v);
+        return true;
+    };
+    double centre;
+    if (!value(0, 0, 0, centre)) return false;
+    const double inv = 1.0 / (h * h);
+    for (int a = 0; a < D; ++a) {
+        openvdb::Coord e(0, 0, 0);
+        e[a] = 1;
+        double plus, minus;
+        if (!value(e[0], e[1], e[2], plus) || !value(-e[0], -e[1], -e[2], minus)) return false;
+        hessian(a, a) = (plus - 2.0 * centre + minus) * inv;
+        for (int b = a + 1; b < D; ++b) {
+            openvdb::Coord f(0, 0, 0);
+            f[b] = 1;
+            double pp, pm, mp, mm;
+            if (!value(e[0] + f[0], e[1] + f[1], e[2] + f[2], pp) ||
+                !value(e[0] - f[0], e[1] - f[1], e[2] - f[2], pm) ||
+                !value(-e[0] + f[0], -e[1] + f[1], -e[2] + f[2], mp) ||
+                !value(-e[0] - f[0], -e[1] - f[1], -e[2] - f[2], mm))
+                return false;
+            hessian(a, b) = hessian(b, a) = (pp - pm - mp + mm) * 0.25 * inv;
+        }
+    }
+    return true;
+}
+
+template <int D>
+double
+latticeNoise(const Surface<D>& surface, int level, bool threaded)
+{
+    const double h = std::ldexp(1.0, -level);
+    // Nodes within h of M need d on 5^D nodes around them (the Hessian's stencil at each of
+    // their 3^D neighbours): |d| <= h + 2 sqrt(D) h < 5 h on all of them.
+    openvdb::FloatGrid::Ptr band = distanceBand<D>(surface, level, 5.0, threaded);
+    std::vector<openvdb::Coord> nodes;
+    for (auto it = band->cbeginValueOn(); it; ++it)
+        if (std::abs(double(*it)) < h) nodes.push_back(it.getCoord());
+    std::sort(nodes.begin(), nodes.end()); // a fixed order, whatever the tree's traversal
+    std::vector<double> rough(nodes.size(), -1.0);
+    auto body = [&](const tbb::blocked_range<size_t>& range) {
+        openvdb::FloatGrid::ConstAccessor acc = band->getConstAccessor();
+        for (size_t n = range.begin(); n != range.end(); ++n) {
+            const openvdb::Coord& c = nodes[n];
+            Mat<D> centre, smoothed = Mat<D>::Zero(), hessian;
+            if (!hessianAt<D>(acc, c, h, centre)) continue;
+            // One [1,2,1]/4 pass along every axis, as ShapeFields smooths the Hessian.
+            bool complete = true;
+            const int kz = D == 3 ? 1 : 0;
+            for (int dz = -kz; dz <= kz && complete; ++dz)
+                for (int dy = -1; dy <= 1 && complete; ++dy)
+                    for (int dx = -1; dx <= 1 && complete; ++dx) {
+                        if (!hessianAt<D>(acc, c.offsetBy(dx, dy, dz), h, hessian)) {
+                            complete = false;
+                            break;
+                        }
+                        const double w = (dx == 0 ? 0.5 : 0.25) * (dy == 0 ? 0.5 : 0.25) *
+                                         (D == 3 ? (dz == 0 ? 0.5 : 0.25) : 1.0);
+                        smoothed += w * hessian;
+                    }
+            if (complete) rough[n] = (centre - smoothed).norm();
+        }
+    };
+    const tbb::blocked_range<size_t> all(0, nodes.size(), 256);
+    if (threaded)
+        tbb::parallel_for(all, body);
+    else
+        body(all);
+    std::vector<double> values;
+    values.reserve(rough.size());
+    for (double r : rough)
+        if (r >= 0 && std::isfinite(r)) values.push_back(r);
+    if (values.empty()) return 0.0;
+    const auto middle = values.begin() + std::ptrdiff_t(values.size() / 2);
+    std::nth_element(values.begin(), middle, values.end());
+    return *middle * h * h;
+}
+
+template <int D>
+NoiseReading
+reading(const Surface<D>& surface, double vertexFactor, double latticeFactor, bool threaded)
+{
+    NoiseReading r;
+    if (!(vertexFactor > 0)) return r;
+    r.vertex = noise<D>(surface);
+    if (latticeFactor > 0) r.lattice = latticeNoise<D>(surface, LATTICE_NOISE_LEVEL, threaded);
+    r.length = std::max(vertexFactor * r.vertex, latticeFactor * r.lattice);
+    return r;
+}
+
 } // namespace
+
+template <>
+NoiseReading
+readNoise<2>(const Surface<2>& surface, double vertexFactor, double latticeFactor, bool threaded)
+{
+    return reading<2>(surface, vertexFactor, latticeFactor, threaded);
+}
+
+template <>
+NoiseReading
+readNoise<3>(const Surface<3>& surface, double vertexFactor, double latticeFactor, bool threaded)
+{
+    return reading<3>(surface, vertexFactor, latticeFactor, threaded);
+}
+
+template <>
+double
+latticeSurfaceNoise<2>(const Surface<2>& surface, int level, bool threaded)
+{
+    return latticeNoise<2>(surface, level, threaded);
+}
+
+template <>
+double
+latticeSurfaceNoise<3>(const Surface<3>& surface, int level, bool threaded)
+{
+    return latticeNoise<3>(surface, level, threaded);
+}
 
 template <>
 double
