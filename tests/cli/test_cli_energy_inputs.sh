@@ -104,6 +104,23 @@ assert "noise" not in plain and smoothed["noise"] == noise, (smoothed.get("noise
 assert noise["target"] > 30 * noise["source"] > 0, noise
 assert noise["smoothingLength"] == [4 * noise["source"], 4 * noise["target"]], noise
 PY
+# 3D reads each shape's noise on a lattice too (an addition, match's 3D default): both commands
+# read the same, and --lattice-noise-smoothing 0 turns it off.
+same_energy lattice-noise-3d 4 "$SPHERE" "$ELLIPSOID" 3 --noise-smoothing 16
+count=$((count + 1))
+if "$VDB_MATCH" energy "$SPHERE" "$ELLIPSOID" --level 4 --json --quiet --noise-smoothing 16 --lattice-noise-smoothing 0 >"$SCRATCH/l0.json" &&
+    "$PYTHON" - "$SCRATCH/lattice-noise-3d.json" "$SCRATCH/lattice-noise-3d/report.json" "$SCRATCH/l0.json" <<'PY'; then echo "ok   lattice-noise-3d-read"; else fail "lattice-noise-3d-read"; fi
+import json, sys
+energy, report, off = (json.load(open(f)) for f in sys.argv[1:])
+assert energy["parameters"]["latticeNoiseSmoothing"] == 3.5 == report["parameters"]["latticeNoiseSmoothing"]
+assert energy["noise"] == report["noise"], (energy["noise"], report["noise"])
+noise = energy["noise"]
+assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
+for i, shape in enumerate(("source", "target")):
+    assert noise["smoothingLength"][i] == max(16 * noise[shape], 3.5 * noise["lattice"][i]), noise
+assert off["parameters"]["latticeNoiseSmoothing"] == 0 and off["noise"]["lattice"] == [0, 0], off["noise"]
+assert off["noise"]["smoothingLength"] == [16 * off["noise"]["source"], 16 * off["noise"]["target"]], off["noise"]
+PY
 # The bending weight follows the passes of the noise smoothing (an addition): the term scales by
 # the level's factor, 1 / (1 + n / P), and nothing else changes.
 count=$((count + 1))
