@@ -1,6 +1,7 @@
 /// @file SurfaceNoise.h
-/// @brief How noisy a surface's vertex positions are, for the Hessian smoothing of its signed
-///        distance (ShapeFieldOptions::hessianSmoothingLength).
+/// @brief How noisy a surface is, read on its vertices (surfaceNoise) and on a lattice
+///        (latticeSurfaceNoise), for the Hessian smoothing of its signed distance
+///        (ShapeFieldOptions::hessianSmoothingLength; readNoise gives the length).
 ///
 /// The shape operator S of eq:defSi comes from second differences of d, which amplify a vertex
 /// noise of size e by 1/h^2: on a scan (noise ~0.2% of the shape's size) S at fine levels is as
@@ -19,7 +20,10 @@
 /// Measured (docs/numerics.md "Noise-adaptive Hessian smoothing"), in unit-box lengths after
 /// match()'s placement: 0.04-1.4 x 10^-5 on the accuracy benchmark's noise-free meshes and
 /// outlines, 5 x 10^-5 on the surfaces extracted from the bundled starfish level sets, against
-/// 4.6-7.4 x 10^-4 on its scans (Gaussian noise of 0.2% of the shape's diagonal).
+/// 4.6-7.4 x 10^-4 on its scans (Gaussian noise of 0.2% of the shape's diagonal). Noise
+/// correlated over a few vertices reads 3-9x lower on this measure; the lattice reading
+/// (latticeSurfaceNoise) reads it at its amplitude (docs/numerics.md "Correlated noise: the
+/// lattice reading").
 #pragma once
 
 #include <vdbmatch/geometry/Surface.h>
