@@ -149,8 +149,9 @@ TEST(LatticeSurfaceNoise, ReadsCorrelatedNoiseAtItsAmplitude)
 
 TEST(LatticeSurfaceNoise, TwoDimensionsAndThreadCountIndependence)
 {
-    // An ellipse in Omega with 2000 points (spacing about 0.0015): white noise is read within
-    // [0.3, 2] sigma, the clean curve below 5% of it; the value does not depend on threading.
+    // An ellipse in Omega with 2000 points (spacing about 0.0015): noise correlated over about
+    // 2 points is read within [0.3, 2] sigma, the clean curve below 5% of it; the value does not
+    // depend on threading.
     const Vec<2> centre(0.5, 0.5);
     const Surface<2> clean = ellipseCurve(centre, 0.3, 0.2, 2000);
     const double sigma = 0.0015;
