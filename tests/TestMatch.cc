@@ -214,6 +214,51 @@ scannedEllipse(double sigma, std::uint64_t seed)
     return scan;
 }
 
+/// The five arms' lengths of the star of the anchor tests.
+std::vector<double>
+starArms()
+{
+    return {0.40, 0.22, 0.34, 0.28, 0.38};
+}
+
+/// A star with the arms starArms() at @a angles (radians) and waists of radius 0.09 between
+/// them, @a perEdge points per straight edge, counter-clockwise.
+Surface<2>
+starOutline(const std::vector<double>& angles, int perEdge)
+{
+    const std::vector<double> arms = starArms();
+    std::vector<Vec<2>> corners;
+    const std::size_t n = arms.size();
+    for (std::size_t k = 0; k < n; ++k) {
+        const double a = angles[k],
+                     b = 0.5 * (a + angles[(k + 1) % n] + (k + 1 == n ? 2 * M_PI : 0));
+        corners.push_back(arms[k] * Vec<2>(std::cos(a), std::sin(a)));
+        corners.push_back(0.09 * Vec<2>(std::cos(b), std::sin(b)));
+    }
+    Surface<2> s;
+    for (std::size_t c = 0; c < corners.size(); ++c)
+        for (int i = 0; i < perEdge; ++i)
+            s.points.push_back(corners[c] + (corners[(c + 1) % corners.size()] - corners[c]) *
+                                                (double(i) / perEdge));
+    for (int i = 0; i < int(s.points.size()); ++i)
+        s.elements.push_back({int32_t(i), int32_t((i + 1) % int(s.points.size()))});
+    return s;
+}
+
+/// The star's rest angles and the same with its first arm turned by 30 degrees (an
+/// articulation: the other arms stay).
+std::pair<std::vector<double>, std::vector<double>>
+starPose()
+{
+    const std::size_t n = starArms().size();
+    std::vector<double> rest(n);
+    for (std::size_t k = 0; k < n; ++k)
+        rest[k] = 0.3 + 2 * M_PI * double(k) / double(n);
+    std::vector<double> oneArm = rest;
+    oneArm[0] += 30 * M_PI / 180;
+    return {rest, oneArm};
+}
+
 } // namespace
 
 TEST(Match, CircleToEllipse2D)
@@ -754,30 +799,9 @@ TEST(Match, AnchorsOnlyForAnArticulation)
     // star with one arm turned by 30 degrees about the centre is an articulation; the whole star
     // turned by 8 degrees moves every arm's end alike (by 0.55-1 times the most, the arms'
     // lengths), yet within the anchor radius.
-    const std::vector<double> arms{0.40, 0.22, 0.34, 0.28, 0.38};
-    const auto star = [&](const std::vector<double>& angles) {
-        std::vector<Vec<2>> corners;
-        const std::size_t n = arms.size();
-        for (std::size_t k = 0; k < n; ++k) {
-            const double a = angles[k],
-                         b = 0.5 * (a + angles[(k + 1) % n] + (k + 1 == n ? 2 * M_PI : 0));
-            corners.push_back(arms[k] * Vec<2>(std::cos(a), std::sin(a)));
-            corners.push_back(0.09 * Vec<2>(std::cos(b), std::sin(b)));
-        }
-        Surface<2> s;
-        for (std::size_t c = 0; c < corners.size(); ++c)
-            for (int i = 0; i < 24; ++i)
-                s.points.push_back(corners[c] + (corners[(c + 1) % corners.size()] - corners[c]) *
-                                                    (double(i) / 24));
-        for (int i = 0; i < int(s.points.size()); ++i)
-            s.elements.push_back({int32_t(i), int32_t((i + 1) % int(s.points.size()))});
-        return s;
-    };
-    std::vector<double> rest(arms.size());
-    for (std::size_t k = 0; k < arms.size(); ++k)
-        rest[k] = 0.3 + 2 * M_PI * double(k) / double(arms.size());
-    std::vector<double> oneArm = rest, turned = rest;
-    oneArm[0] += 30 * M_PI / 180;
+    const auto star = [&](const std::vector<double>& angles) { return starOutline(angles, 24); };
+    const auto [rest, oneArm] = starPose();
+    std::vector<double> turned = rest;
     for (double& a : turned)
         a += 8 * M_PI / 180;
     MatchOptions opts = MatchOptions::defaults(2);
@@ -801,6 +825,67 @@ TEST(Match, AnchorsOnlyForAnArticulation)
                 << s.anchorReason; // within the anchor radius: the ratio decides
         }
     }
+}
+
+/// The anchors' tolerance follows the noise (MatchOptions::anchorNoiseFactor, a default): a
+/// target with noise correlated over a few points lies off the source by more than the fixed
+/// tolerance almost everywhere, so that few anchors would hold the arms that stayed; the
+/// tolerance then grows to the factor times the shapes' correlated noise and finds them. A
+/// noise-free pair keeps the fixed tolerance. In 2D the lattice reading, which the factor needs, is
+/// taken only with hessianLatticeNoiseFactor > 0, as here.
+TEST(Match, AnchorToleranceFollowsCorrelatedNoise)
+{
+    EXPECT_EQ(MatchOptions::defaults(3).anchorNoiseFactor, DEFAULT_ANCHOR_NOISE_FACTOR);
+    EXPECT_EQ(MatchOptions::defaults(2).anchorNoiseFactor, DEFAULT_ANCHOR_NOISE_FACTOR);
+    EXPECT_EQ(MatchOptions::paper(3).anchorNoiseFactor, 0.0);
+    const auto [rest, oneArm] = starPose();
+    const Surface<2> a = starOutline(rest, 96), clean = starOutline(oneArm, 96);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.hessianLatticeNoiseFactor = LATTICE_NOISE_SMOOTHING_FACTOR_3D;
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 4;
+    opts.multiscale.descent.maxIterations = 0; // the anchors only
+    const UnitBoxPlacement placement = placeInUnitBox(a, clean, opts.margin);
+    // Radial noise of 0.4% of the unit box correlated over about 4 points (spacing ~0.004);
+    // the arms take its normal part.
+    const Surface<2> scan =
+        test::correlatedNoise(clean, Vec<2>(0, 0), 0.004 / placement.scale, 4, 17);
+    MatchOptions fixed = opts;
+    fixed.anchorNoiseFactor = 0;
+    const double tolerance = opts.anchorOptions.tolerance;
+
+    const MatchResult<2> cleanRun = match<2>(a, clean, placement, opts);
+    ASSERT_TRUE(cleanRun.autoLandmarks.used) << cleanRun.autoLandmarks.reason;
+    EXPECT_EQ(cleanRun.autoLandmarks.anchorTolerance, tolerance);
+    EXPECT_GT(cleanRun.autoLandmarks.anchors.size(), 10u) << cleanRun.autoLandmarks.anchorReason;
+
+    const MatchResult<2> fixedRun = match<2>(a, scan, placement, fixed);
+    ASSERT_TRUE(fixedRun.autoLandmarks.used) << fixedRun.autoLandmarks.reason;
+    EXPECT_EQ(fixedRun.autoLandmarks.anchorTolerance, tolerance);
+
+    const MatchResult<2> noisy = match<2>(a, scan, placement, opts);
+    const AutoLandmarkSummary& s = noisy.autoLandmarks;
+    ASSERT_TRUE(s.used) << s.reason;
+    NoiseReading readings[2];
+    for (int k = 0; k < 2; ++k) {
+        readings[k].vertex = noisy.shapeNoise[k];
+        readings[k].lattice = noisy.latticeNoise[k];
+    }
+    const double correlated =
+        std::hypot(correlatedNoise(readings[0]), correlatedNoise(readings[1]));
+    std::printf("target: vertex %.3g, lattice %.3g; anchors' tolerance %.3g, %zu anchors; "
+                "coincident share %.3f clean, %.3f fixed, %.3f following the noise\n",
+                noisy.shapeNoise[1], noisy.latticeNoise[1], s.anchorTolerance, s.anchors.size(),
+                cleanRun.autoLandmarks.anchorCoincidentShare,
+                fixedRun.autoLandmarks.anchorCoincidentShare, s.anchorCoincidentShare);
+    EXPECT_EQ(s.anchorTolerance, DEFAULT_ANCHOR_NOISE_FACTOR * correlated);
+    EXPECT_GT(s.anchorTolerance, tolerance);
+    EXPECT_GT(s.anchors.size(), 10u) << s.anchorReason;
+    // The noise takes away most of where the shapes coincide (measured 0.546 -> 0.074 of the
+    // vertices); following it brings back most of it (0.327).
+    const double share = cleanRun.autoLandmarks.anchorCoincidentShare;
+    EXPECT_LT(fixedRun.autoLandmarks.anchorCoincidentShare, 0.25 * share);
+    EXPECT_GT(s.anchorCoincidentShare, 0.5 * share);
 }
 
 TEST(Match, LandmarksTurnACircleNoShapeEnergyCanTell)

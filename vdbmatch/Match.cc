@@ -140,6 +140,7 @@ MatchOptions::defaults(int dim)
     opts.hessianNoiseFactor = NOISE_SMOOTHING_LENGTH_FACTOR;
     opts.hessianLatticeNoiseFactor = dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0;
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
+    opts.anchorNoiseFactor = DEFAULT_ANCHOR_NOISE_FACTOR;
     return opts;
 }
 
@@ -180,6 +181,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: the anchor tolerance and radius must be finite and >= 0, got "
                           << anchorOptions.tolerance << " and " << anchorOptions.radius);
+    }
+    if (!(anchorNoiseFactor >= 0) || !std::isfinite(anchorNoiseFactor)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: anchorNoiseFactor must be finite and >= 0, got "
+                          << anchorNoiseFactor);
     }
     if (!(hessianNoiseFactor >= 0) || !std::isfinite(hessianNoiseFactor)) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -339,11 +345,12 @@ minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
 namespace {
 
 /// MatchOptions::autoLandmarks: the paired extremities of the two shapes (Omega units in,
-/// world units out).
+/// world units out), and the anchors, sought with a tolerance of at least
+/// MatchOptions::anchorNoiseFactor times @a correlated, the shapes' correlated noise (Omega units).
 template <int D>
 AutoLandmarkSummary
 autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
-              const UnitBoxPlacement& placement, const MatchOptions& opts)
+              const UnitBoxPlacement& placement, const MatchOptions& opts, double correlated)
 {
     const Clock::time_point start = Clock::now();
     AutoLandmarkSummary out;
@@ -410,9 +417,15 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     } else if (opts.autoAnchors) {
         StillAnchorOptions ao = opts.anchorOptions;
         ao.threaded = opts.threaded;
+        ao.tolerance = std::max(ao.tolerance, opts.anchorNoiseFactor * correlated);
         const StillAnchors<D> anchors = findStillAnchors<D>(unitSource, unitTarget, ao);
+        out.anchorTolerance = ao.tolerance;
         out.anchorCoincidentShare = anchors.coincidentShare();
-        if (anchors.points.empty()) out.anchorReason = "the shapes coincide nowhere";
+        if (anchors.points.empty()) {
+            std::ostringstream s;
+            s << "the shapes coincide nowhere (within " << ao.tolerance << ", unit box)";
+            out.anchorReason = s.str();
+        }
         for (const Vec<D>& p : anchors.points) {
             openvdb::Vec3d w = world(p);
             if (D == 2) w[2] = 0;
@@ -685,6 +698,33 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
 
     MatchResult<D> result;
     result.placement = placement;
+    // Each shape's Hessian smoothed over a length from its own noise (geometry/SurfaceNoise.h).
+    ShapeSamplerOptions sourceSampler = opts.sampler, targetSampler = opts.sampler;
+    // The length is the larger of the vertex and the lattice readings' (docs/numerics.md
+    // "Correlated noise"): white vertex noise reads higher on the first, noise correlated over
+    // a few vertices on the second.
+    double correlated = 0; // Omega units
+    if (opts.hessianNoiseFactor > 0) {
+        NoiseReading noise[2];
+        detail::invokeBoth(
+            opts.threaded,
+            [&] {
+                noise[0] = readNoise(unitSource, opts.hessianNoiseFactor,
+                                     opts.hessianLatticeNoiseFactor, opts.threaded);
+            },
+            [&] {
+                noise[1] = readNoise(unitTarget, opts.hessianNoiseFactor,
+                                     opts.hessianLatticeNoiseFactor, opts.threaded);
+            });
+        result.shapeNoise = {noise[0].vertex, noise[1].vertex};
+        result.latticeNoise = {noise[0].lattice, noise[1].lattice};
+        result.smoothingLength = {noise[0].length, noise[1].length};
+        sourceSampler.fields.hessianSmoothingLength = noise[0].length;
+        targetSampler.fields.hessianSmoothingLength = noise[1].length;
+        // The anchors' tolerance follows the noise the two shapes add up to.
+        correlated = std::hypot(correlatedNoise(noise[0]), correlatedNoise(noise[1]));
+    }
+
     // The landmarks act at every level, automatic ones at the first autoLandmarkLevels only.
     int lastLandmarkLevel = std::numeric_limits<int>::max();
     if (opts.autoLandmarks && opts.sourceLandmarks.empty() && opts.initial) {
@@ -693,7 +733,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         result.autoLandmarks.requested = true;
         result.autoLandmarks.reason = "the run starts from an earlier result";
     } else if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
-        result.autoLandmarks = autoLandmarks(unitSource, unitTarget, placement, opts);
+        result.autoLandmarks = autoLandmarks(unitSource, unitTarget, placement, opts, correlated);
         lastLandmarkLevel = result.autoLandmarks.lastLevel;
         opts.sourceLandmarks = result.autoLandmarks.source;
         opts.targetLandmarks = result.autoLandmarks.target;
@@ -771,30 +811,6 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     LevelSummary pending;
     // Distance tiers shared between levels (the coarse box and the band two levels down).
     ShapeSamplerCache<D> sourceTiers, targetTiers;
-    // Each shape's Hessian smoothed over a length from its own noise (geometry/SurfaceNoise.h).
-    ShapeSamplerOptions sourceSampler = opts.sampler, targetSampler = opts.sampler;
-    // The length is the larger of the vertex and the lattice readings' (docs/numerics.md
-    // "Correlated noise"): white vertex noise reads higher on the first, noise correlated over
-    // a few vertices on the second.
-    if (opts.hessianNoiseFactor > 0) {
-        NoiseReading noise[2];
-        detail::invokeBoth(
-            opts.threaded,
-            [&] {
-                noise[0] = readNoise(unitSource, opts.hessianNoiseFactor,
-                                     opts.hessianLatticeNoiseFactor, opts.threaded);
-            },
-            [&] {
-                noise[1] = readNoise(unitTarget, opts.hessianNoiseFactor,
-                                     opts.hessianLatticeNoiseFactor, opts.threaded);
-            });
-        result.shapeNoise = {noise[0].vertex, noise[1].vertex};
-        result.latticeNoise = {noise[0].lattice, noise[1].lattice};
-        result.smoothingLength = {noise[0].length, noise[1].length};
-        sourceSampler.fields.hessianSmoothingLength = noise[0].length;
-        targetSampler.fields.hessianSmoothingLength = noise[1].length;
-    }
-
     const multiscale::ContextLevelBuilder<D> builder =
         [&](const multiscale::LevelContext<D>& context) {
             const int l = context.level;

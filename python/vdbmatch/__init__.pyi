@@ -83,6 +83,7 @@ def match(
     anchor_count: int | None = None,
     anchor_radius: float | None = None,
     anchor_tolerance: float | None = None,
+    anchor_noise_tolerance: float | None = None,
     inner_distance_weight: float | None = None,
     inner_distance_tolerance: float | None = None,
     inner_distance_ratio: float | None = None,

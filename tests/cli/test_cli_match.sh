@@ -286,6 +286,7 @@ assert 0 < noise["source"] < 1e-3 and 0 < noise["target"] < 1e-3, noise
 # ... and, in 3D, from the noise a lattice of h = 1/128 sees (an addition): the length is the
 # larger of the two readings' (these noise-free level sets read ~1e-4 on the lattice)
 assert paper["latticeNoiseSmoothing"] == 0 and default["latticeNoiseSmoothing"] == 3.5, (paper, default)
+assert paper["anchorNoiseTolerance"] == 0 and default["anchorNoiseTolerance"] == 1.6, (paper, default)
 assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
 for i, shape in enumerate(("source", "target")):
     assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],
@@ -314,6 +315,12 @@ if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["para
 check lattice-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/lold" --config "$SCRATCH/old_lattice.json" --levels 3..3 --quiet
 count=$((count + 1))
 if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; n = r["noise"]; assert p["latticeNoiseSmoothing"] == 0 and n["lattice"] == [0, 0] and n["smoothingLength"][1] == p["noiseSmoothing"] * n["target"], r' "$SCRATCH/lold/report.json"; then echo "ok   lattice-noise-old-report"; else fail "lattice-noise-old-report"; fi
+check anchor-noise-tolerance-negative 1 '' '--anchor-noise-tolerance must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --anchor-noise-tolerance -1 --quiet
+# ... and one before the anchors' tolerance followed the noise, with the fixed tolerance.
+"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("anchorNoiseTolerance"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_anchor.json"
+check anchor-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/aold" --config "$SCRATCH/old_anchor.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["anchorNoiseTolerance"] == 0 and p["latticeNoiseSmoothing"] == 3.5, p' "$SCRATCH/aold/report.json"; then echo "ok   anchor-noise-old-report"; else fail "anchor-noise-old-report"; fi
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
@@ -600,6 +607,10 @@ terms = [l["terms"]["landmarks"] for l in bare["levels"]]
 assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
 assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorCount"] == 100  # 2D
 assert 0 < A["anchors"] <= 100 and 0 < A["anchorCoincidentShare"] < 1, A
+# The anchors' tolerance follows the shapes' correlated noise (an addition), read on the
+# lattice, which 2D reads only on request: these outlines keep the fixed tolerance.
+assert auto["parameters"]["anchorNoiseTolerance"] == 1.6, auto["parameters"]
+assert A["anchorTolerance"] == auto["parameters"]["anchorTolerance"] == 0.002, A
 terms = [l["terms"]["landmarks"] for l in auto["levels"]]
 assert all(t > 0 for t in terms), terms
 assert small["autoLandmarks"]["anchors"] == 0  # no landmarks, no anchors

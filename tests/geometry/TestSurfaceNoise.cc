@@ -145,6 +145,23 @@ TEST(LatticeSurfaceNoise, ReadsCorrelatedNoiseAtItsAmplitude)
         EXPECT_GT(lattice[i], 0.7 * sigma) << passes[i] << " passes";
         EXPECT_LT(lattice[i], 2.0 * sigma) << passes[i] << " passes";
     }
+    // correlatedNoise(), which sets the anchors' tolerance (MatchOptions::anchorNoiseFactor):
+    // the part of the lattice reading beyond WHITE_NOISE_LATTICE_RATIO times the vertex
+    // reading is none of white noise and nearly all of correlated noise.
+    double correlated[3];
+    for (int i = 0; i < 3; ++i) {
+        NoiseReading r;
+        r.vertex = vertex[i];
+        r.lattice = lattice[i];
+        correlated[i] = correlatedNoise(r);
+        std::printf("%d passes: lattice / vertex %.3g, correlated %.3g\n", passes[i],
+                    lattice[i] / vertex[i], correlated[i]);
+    }
+    EXPECT_EQ(correlated[0], 0.0);
+    EXPECT_GT(correlated[2], 0.9 * lattice[2]);
+    EXPECT_LE(correlated[2], lattice[2]);
+    NoiseReading none;
+    EXPECT_EQ(correlatedNoise(none), 0.0); // the lattice not read
 }
 
 TEST(LatticeSurfaceNoise, TwoDimensionsAndThreadCountIndependence)

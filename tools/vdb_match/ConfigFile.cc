@@ -66,6 +66,7 @@ configKeys()
         {"anchorCount", "--anchor-count"},
         {"anchorRadius", "--anchor-radius"},
         {"anchorTolerance", "--anchor-tolerance"},
+        {"anchorNoiseTolerance", "--anchor-noise-tolerance"},
         {"innerDistanceWeight", "--inner-distance-weight"},
         {"innerDistanceTolerance", "--inner-distance-tolerance"},
         {"innerDistanceRatio", "--inner-distance-ratio"},
@@ -190,6 +191,12 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
         !params.contains("latticeNoiseSmoothing")) {
         settings.push_back({"latticeNoiseSmoothing", "--lattice-noise-smoothing", "0"});
+    }
+    // ... and one before the anchors' tolerance followed the noise (no anchorNoiseTolerance)
+    // kept the fixed one.
+    if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
+        !params.contains("anchorNoiseTolerance")) {
+        settings.push_back({"anchorNoiseTolerance", "--anchor-noise-tolerance", "0"});
     }
     // ... and one before the noise-adaptive bending weight (no noiseBending) kept c_bend.
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&

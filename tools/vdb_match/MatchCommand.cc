@@ -109,11 +109,12 @@ struct MatchCliOptions
     std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
     std::optional<bool> secondPath;  ///< --second-path on|off (default per preset)
     double secondPathShare = DEFAULT_SECOND_PATH_SHARE;
-    bool secondPathTarget = false;             ///< --second-path-target on|off
-    std::optional<double> anchorWeight;        ///< --anchor-weight (default per dimension)
-    std::optional<std::size_t> anchorCount;    ///< --anchor-count (default per dimension)
-    StillAnchorOptions anchorOptions;          ///< --anchor-radius, --anchor-tolerance
-    std::optional<double> innerDistanceWeight; ///< --inner-distance-weight (default per dimension)
+    bool secondPathTarget = false;              ///< --second-path-target on|off
+    std::optional<double> anchorWeight;         ///< --anchor-weight (default per dimension)
+    std::optional<std::size_t> anchorCount;     ///< --anchor-count (default per dimension)
+    StillAnchorOptions anchorOptions;           ///< --anchor-radius, --anchor-tolerance
+    std::optional<double> anchorNoiseTolerance; ///< --anchor-noise-tolerance (per preset)
+    std::optional<double> innerDistanceWeight;  ///< --inner-distance-weight (default per dimension)
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
@@ -130,9 +131,10 @@ struct MatchCliOptions
     std::string commandLine;
 };
 
-/// One line on what the automatic landmarks did.
+/// One line on what the automatic landmarks did; @a tolerance is the anchors' fixed one
+/// (--anchor-tolerance), named when the noise raised it.
 std::string
-autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
+autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
 {
     if (!a.used) return "automatic landmarks: not used: " + a.reason;
     return "automatic landmarks: " + std::to_string(a.source.size()) +
@@ -144,7 +146,12 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel)
                 ? (a.anchorReason.empty() ? std::string() : "; no anchors: " + a.anchorReason)
                 : ", with " + std::to_string(a.anchors.size()) +
                       " still anchors at every level (M1 and M2 coincide on " +
-                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices)");
+                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices" +
+                      (a.anchorTolerance > tolerance
+                           ? ", within " + fixed("%.2e", a.anchorTolerance) +
+                                 " of the unit box: the tolerance follows the noise"
+                           : std::string()) +
+                      ")");
 }
 
 /// One line on the inner-distance term before the first level: its fields, or why it does not
@@ -577,6 +584,19 @@ matchOptionTable()
          [](O& o, const std::string& v) {
              o.anchorOptions.tolerance = parseDouble("--anchor-tolerance", v);
          }},
+        {"--anchor-noise-tolerance", "K", "Landmarks (an addition to the paper)",
+         "the anchors' tolerance is at least K times the two shapes' correlated noise: the part "
+         "of each shape's lattice noise reading (--lattice-noise-smoothing) that its vertex "
+         "noise does not account for as white noise. A scan whose noise is correlated over a "
+         "few vertices then still coincides with the other shape where nothing moved; white "
+         "noise and noise-free shapes keep --anchor-tolerance. Needs the lattice reading (by "
+         "default in 3D only); >= 0, 0: off (default " +
+             formatNumber(DEFAULT_ANCHOR_NOISE_FACTOR) +
+             "; --preset paper: 0). report.json \"autoLandmarks\" gives the \"anchorTolerance\" "
+             "used (docs/numerics.md \"Correlated noise\")",
+         [](O& o, const std::string& v) {
+             o.anchorNoiseTolerance = parseDouble("--anchor-noise-tolerance", v);
+         }},
         {"--inner-distance-weight", "X", "Landmarks (an addition to the paper)",
          "c_F of the inner-distance term, >= 0: when the automatic anchors act (an "
          "articulation), keep each "
@@ -806,6 +826,9 @@ parseMatchOptions(int argc, const char* const* argv, int first)
         throw UsageError("--lattice-noise-smoothing must be a finite number >= 0");
     if (o.noiseBending && !(*o.noiseBending >= 0 && std::isfinite(*o.noiseBending)))
         throw UsageError("--noise-bending must be a finite number >= 0");
+    if (o.anchorNoiseTolerance &&
+        !(*o.anchorNoiseTolerance >= 0 && std::isfinite(*o.anchorNoiseTolerance)))
+        throw UsageError("--anchor-noise-tolerance must be a finite number >= 0");
     if (o.maxIterations < 0) throw UsageError("--max-iterations must be >= 0");
     if (!o.init.empty() && !o.warmStart.empty()) {
         throw UsageError("--init (this pair's earlier result) and --warm-start (another pair's) "
@@ -1099,6 +1122,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorCount", opts.anchorOptions.count},
              {"anchorRadius", opts.anchorOptions.radius},
              {"anchorTolerance", opts.anchorOptions.tolerance},
+             {"anchorNoiseTolerance", opts.anchorNoiseFactor},
              {"innerDistanceWeight", opts.innerDistanceWeight},
              {"innerDistanceTolerance", opts.innerDistanceTolerance},
              {"innerDistanceRatio", opts.innerDistanceRatio},
@@ -1129,6 +1153,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                  {"anchors", a.anchors.size()},
                  {"anchorCoincidentShare", a.anchorCoincidentShare},
                  {"anchorReason", a.anchorReason.empty() ? Json() : Json(a.anchorReason)},
+                 {"anchorTolerance", a.anchorTolerance},
                  {"seconds", a.seconds}};
         if (a.used) {
             j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
@@ -1339,6 +1364,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     const std::size_t anchorCount = opts.anchorOptions.count; // the dimension's default
     opts.anchorOptions = o.anchorOptions;
     opts.anchorOptions.count = o.anchorCount.value_or(anchorCount);
+    if (o.anchorNoiseTolerance) opts.anchorNoiseFactor = *o.anchorNoiseTolerance;
     opts.validate();
     if (o.deformationLevel < 0 || o.deformationLevel > opts.multiscale.maxLevel) {
         OPENVDB_THROW(openvdb::ValueError, "--deformation-level must be in [1, "
@@ -1426,7 +1452,8 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     observer.iteration = [&](const solver::IterationInfo& i) { progress->iteration(i); };
     observer.levelEnd = [&](const LevelSummary& s) { progress->levelEnd(s); };
     observer.autoLandmarks = [&](const AutoLandmarkSummary& a) {
-        progress->message(autoLandmarkLine(a, opts.multiscale.minLevel));
+        progress->message(
+            autoLandmarkLine(a, opts.multiscale.minLevel, opts.anchorOptions.tolerance));
     };
     observer.innerDistance = [&](const InnerDistanceSummary& f) {
         progress->message(innerDistanceStartLine(f));
@@ -1665,7 +1692,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
             << ")\n";
     }
     if (result.autoLandmarks.requested)
-        out << "vdb_match: " << autoLandmarkLine(result.autoLandmarks, opts.multiscale.minLevel)
+        out << "vdb_match: "
+            << autoLandmarkLine(result.autoLandmarks, opts.multiscale.minLevel,
+                                opts.anchorOptions.tolerance)
             << "\n";
     if (result.innerDistance.requested)
         out << "vdb_match: " << innerDistanceLine(result.innerDistance) << "\n";

@@ -217,6 +217,13 @@ reading(const Surface<D>& surface, double vertexFactor, double latticeFactor, bo
 
 } // namespace
 
+double
+correlatedNoise(const NoiseReading& reading)
+{
+    const double white = WHITE_NOISE_LATTICE_RATIO * reading.vertex;
+    return std::sqrt(std::max(0.0, reading.lattice * reading.lattice - white * white));
+}
+
 template <>
 NoiseReading
 readNoise<2>(const Surface<2>& surface, double vertexFactor, double latticeFactor, bool threaded)

@@ -84,6 +84,18 @@ struct NoiseReading
     double length = 0;  ///< max(vertexFactor * vertex, latticeFactor * lattice)
 };
 
+/// Largest ratio of the lattice reading to the vertex reading that white (independent,
+/// per-vertex) noise gives: the accuracy benchmark's white 3D scans read 4.3-5.3, noise
+/// correlated over about 2 and 4 edges 11-12 and 26-31 (docs/numerics.md "Correlated noise").
+constexpr double WHITE_NOISE_LATTICE_RATIO = 6;
+
+/// The part of a shape's lattice reading that its vertex reading does not account for as white
+/// noise: sqrt(max(0, lattice^2 - (WHITE_NOISE_LATTICE_RATIO * vertex)^2)), in the reading's
+/// units. About the lattice reading for noise correlated over a few vertices, 0 for white
+/// noise, and at most the lattice reading of a noise-free shape (1e-4 of the box on the
+/// benchmark's meshes). 0 when the lattice was not read.
+double correlatedNoise(const NoiseReading& reading);
+
 /// The readings of @a surface (Omega units) and its smoothing length: the larger of
 /// @a vertexFactor times surfaceNoise() and @a latticeFactor times latticeSurfaceNoise() at
 /// LATTICE_NOISE_LEVEL (read only when both factors are > 0). All zeros when vertexFactor is 0.
