@@ -140,7 +140,7 @@ MatchOptions::defaults(int dim)
     opts.hessianNoiseFactor = NOISE_SMOOTHING_LENGTH_FACTOR;
     opts.hessianLatticeNoiseFactor = dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0;
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
-    opts.anchorNoiseFactor = DEFAULT_ANCHOR_NOISE_FACTOR;
+    opts.anchorNoiseFactor = dim == 3 ? DEFAULT_ANCHOR_NOISE_FACTOR_3D : 0.0;
     return opts;
 }
 

@@ -102,12 +102,13 @@ constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 30000;
 /// leave coinciding parts that may have slid along themselves: docs/numerics.md "Automatic
 /// anchors".
 constexpr double ANCHOR_STILL_RATIO = 0.5;
-/// Default MatchOptions::anchorNoiseFactor: the anchors' tolerance is at least this times the
-/// shapes' correlated noise (correlatedNoise(), about 1.6 times its standard deviation), so
+/// Default MatchOptions::anchorNoiseFactor in 3D: the anchors' tolerance is at least this times
+/// the shapes' correlated noise (correlatedNoise(), about 1.6 times its standard deviation), so
 /// about 2.5 standard deviations. A noisy scan then still coincides with the source where it
-/// did not move; white noise and noise-free shapes keep the fixed tolerance
-/// (docs/numerics.md "Correlated noise", *The anchors' tolerance follows the noise*).
-constexpr double DEFAULT_ANCHOR_NOISE_FACTOR = 1.6;
+/// did not move; white noise and noise-free shapes keep the fixed tolerance. 0 in 2D, where
+/// the outlines' coincident share under noise stays larger and the rule gained nothing on the
+/// benchmark's figures (docs/numerics.md "The anchors' tolerance follows the noise").
+constexpr double DEFAULT_ANCHOR_NOISE_FACTOR_3D = 1.6;
 constexpr double DEFAULT_MATCH_TOLERANCE_COARSENING = 4;
 constexpr double DEFAULT_MATCH_SETTLE_TOLERANCE = 0;
 /// Default surface test (MultiscaleOptions::surfaceTolerance, --surface-tolerance) at the finest
@@ -270,10 +271,10 @@ struct MatchOptions
     /// The anchors' tolerance follows the noise, an addition to the paper: it is the larger of
     /// anchorOptions.tolerance and this factor times the hypotenuse of the two shapes'
     /// correlatedNoise() (geometry/SurfaceNoise.h), from the readings the Hessian smoothing
-    /// takes (so it acts only with hessianNoiseFactor and hessianLatticeNoiseFactor > 0: by
-    /// default in 3D). Noise correlated over a few vertices keeps a scan off the source by its
-    /// amplitude where nothing moved, so that no patch of it lies within the fixed tolerance.
-    /// >= 0; 0: off (paper()); defaults(): DEFAULT_ANCHOR_NOISE_FACTOR.
+    /// takes (so it acts only with hessianNoiseFactor and hessianLatticeNoiseFactor > 0). Noise
+    /// correlated over a few vertices keeps a scan off the source by its amplitude where
+    /// nothing moved, so that no patch of it lies within the fixed tolerance. >= 0; 0: off
+    /// (paper()); defaults(): DEFAULT_ANCHOR_NOISE_FACTOR_3D in 3D, 0 in 2D.
     double anchorNoiseFactor = 0;
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
     /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):

@@ -607,9 +607,9 @@ terms = [l["terms"]["landmarks"] for l in bare["levels"]]
 assert terms[0] > 0 and terms[1] > 0 and terms[2] == 0, terms
 assert auto["parameters"]["autoAnchors"] == "on" and auto["parameters"]["anchorCount"] == 100  # 2D
 assert 0 < A["anchors"] <= 100 and 0 < A["anchorCoincidentShare"] < 1, A
-# The anchors' tolerance follows the shapes' correlated noise (an addition), read on the
-# lattice, which 2D reads only on request: these outlines keep the fixed tolerance.
-assert auto["parameters"]["anchorNoiseTolerance"] == 1.6, auto["parameters"]
+# The anchors' tolerance follows the shapes' correlated noise (an addition), in 3D only by
+# default: these outlines keep the fixed tolerance.
+assert auto["parameters"]["anchorNoiseTolerance"] == 0, auto["parameters"]
 assert A["anchorTolerance"] == auto["parameters"]["anchorTolerance"] == 0.002, A
 terms = [l["terms"]["landmarks"] for l in auto["levels"]]
 assert all(t > 0 for t in terms), terms

@@ -589,10 +589,10 @@ matchOptionTable()
          "of each shape's lattice noise reading (--lattice-noise-smoothing) that its vertex "
          "noise does not account for as white noise. A scan whose noise is correlated over a "
          "few vertices then still coincides with the other shape where nothing moved; white "
-         "noise and noise-free shapes keep --anchor-tolerance. Needs the lattice reading (by "
-         "default in 3D only); >= 0, 0: off (default " +
-             formatNumber(DEFAULT_ANCHOR_NOISE_FACTOR) +
-             "; --preset paper: 0). report.json \"autoLandmarks\" gives the \"anchorTolerance\" "
+         "noise and noise-free shapes keep --anchor-tolerance. Needs the lattice reading; "
+         ">= 0, 0: off (default " +
+             formatNumber(DEFAULT_ANCHOR_NOISE_FACTOR_3D) +
+             " in 3D, 0 in 2D; --preset paper: 0). report.json \"autoLandmarks\" gives the \"anchorTolerance\" "
              "used (docs/numerics.md \"Correlated noise\")",
          [](O& o, const std::string& v) {
              o.anchorNoiseTolerance = parseDouble("--anchor-noise-tolerance", v);
