@@ -593,7 +593,7 @@ matchOptionTable()
          ">= 0, 0: off (default " +
              formatNumber(DEFAULT_ANCHOR_NOISE_FACTOR_3D) +
              " in 3D, 0 in 2D; --preset paper: 0). report.json \"autoLandmarks\" gives the \"anchorTolerance\" "
-             "used (docs/numerics.md \"Correlated noise\")",
+             "used (docs/numerics.md \"The anchors' tolerance follows the noise\")",
          [](O& o, const std::string& v) {
              o.anchorNoiseTolerance = parseDouble("--anchor-noise-tolerance", v);
          }},
