@@ -827,6 +827,56 @@ TEST(Match, AnchorsOnlyForAnArticulation)
     }
 }
 
+TEST(Match, AnchorsActBesideGivenLandmarks)
+{
+    // Landmarks given by the caller replace the automatic ones; with landmarkAnchors (the
+    // default) the extremities are still paired, only to tell an articulation, and the anchors
+    // then act at every level beside the given landmarks. Off (as before 2026-11-29), given
+    // landmarks turn the anchors off. What the anchors then do for the error is measured on the
+    // benchmark's pairs (tests/bench/test_auto_anchors.py, docs/numerics.md).
+    EXPECT_TRUE(MatchOptions::defaults(2).landmarkAnchors);
+    EXPECT_TRUE(MatchOptions::defaults(3).landmarkAnchors);
+    EXPECT_FALSE(MatchOptions::paper(3).landmarkAnchors);
+    const auto [rest, oneArm] = starPose();
+    const std::vector<double> arms = starArms();
+    const Surface<2> a = starOutline(rest, 24), b = starOutline(oneArm, 24);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 5;
+    // The caller marks the tip of the arm that turned.
+    opts.sourceLandmarks = {arms[0] * openvdb::Vec3d(std::cos(rest[0]), std::sin(rest[0]), 0)};
+    opts.targetLandmarks = {arms[0] * openvdb::Vec3d(std::cos(oneArm[0]), std::sin(oneArm[0]), 0)};
+    const UnitBoxPlacement placement = placeInUnitBox(a, b, opts.margin);
+    MatchOptions off = opts;
+    off.landmarkAnchors = false;
+    MatchOptions noAnchors = opts;
+    noAnchors.autoAnchors = false;
+    const MatchResult<2> with = match<2>(a, b, placement, opts);
+    ASSERT_TRUE(with.isComplete());
+    const AutoLandmarkSummary& s = with.autoLandmarks;
+    EXPECT_TRUE(s.requested);
+    EXPECT_TRUE(s.paired);
+    EXPECT_FALSE(s.used); // the given landmarks act, not the extremities
+    EXPECT_NE(s.reason.find("given landmarks"), std::string::npos) << s.reason;
+    EXPECT_TRUE(s.source.empty() && s.target.empty());
+    EXPECT_GT(s.anchors.size(), 10u) << s.anchorReason;
+    EXPECT_EQ(with.landmarks.count, 1u);
+    for (const MatchOptions& o : {off, noAnchors}) {
+        const MatchResult<2> r = match<2>(a, b, placement, o);
+        EXPECT_FALSE(r.autoLandmarks.requested);
+        EXPECT_TRUE(r.autoLandmarks.anchors.empty());
+        EXPECT_EQ(r.landmarks.count, 1u);
+    }
+    // A whole turn of the star is no articulation: no anchors beside the landmarks either.
+    std::vector<double> turned = rest;
+    for (double& t : turned)
+        t += 8 * M_PI / 180;
+    const MatchResult<2> turn = match<2>(a, starOutline(turned, 24), placement, opts);
+    EXPECT_TRUE(turn.autoLandmarks.anchors.empty());
+    EXPECT_NE(turn.autoLandmarks.anchorReason.find("move alike"), std::string::npos)
+        << turn.autoLandmarks.anchorReason;
+}
+
 /// The anchors' tolerance follows the noise (MatchOptions::anchorNoiseFactor, a 3D default): a
 /// target with noise correlated over a few points lies off the source by more than the fixed
 /// tolerance almost everywhere, so that few anchors would hold the arms that stayed; the

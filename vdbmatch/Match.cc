@@ -134,6 +134,7 @@ MatchOptions::defaults(int dim)
     if (dim == 2) opts.multiscale.metricTauFactor = DEFAULT_MATCH_METRIC_TAU_2D;
     opts.autoLandmarks = true;
     opts.autoAnchors = true;
+    opts.landmarkAnchors = true;
     opts.innerDistanceWeight =
         dim == 2 ? DEFAULT_INNER_DISTANCE_WEIGHT_2D : DEFAULT_INNER_DISTANCE_WEIGHT_3D;
     opts.secondPath = true;
@@ -347,10 +348,14 @@ namespace {
 /// MatchOptions::autoLandmarks: the paired extremities of the two shapes (Omega units in,
 /// world units out), and the anchors, sought with a tolerance of at least
 /// MatchOptions::anchorNoiseFactor times @a correlated, the shapes' correlated noise (Omega units).
+/// With @a anchorsOnly (MatchOptions::landmarkAnchors: the caller's landmarks act instead) the
+/// paired extremities only decide whether the motion is an articulation, and so whether the
+/// anchors act; they are not landmarks (used stays false, source and target empty).
 template <int D>
 AutoLandmarkSummary
 autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
-              const UnitBoxPlacement& placement, const MatchOptions& opts, double correlated)
+              const UnitBoxPlacement& placement, const MatchOptions& opts, double correlated,
+              bool anchorsOnly)
 {
     const Clock::time_point start = Clock::now();
     AutoLandmarkSummary out;
@@ -366,7 +371,12 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     const ExtremityPairing pairing = matchExtremities<D>(a, b);
     out.seconds = secondsSince(start);
     if (!pairing.ok) {
-        out.reason = pairing.reason;
+        if (anchorsOnly) {
+            out.reason = "the given landmarks act instead";
+            out.anchorReason = "the extremities cannot be paired: " + pairing.reason;
+        } else {
+            out.reason = pairing.reason;
+        }
         return out;
     }
     out.paired = true;
@@ -381,7 +391,10 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     const int first = opts.multiscale.minLevel;
     out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
                     std::ldexp(1.0, -first);
-    if (!(out.maxMotion > out.minMotion)) {
+    if (anchorsOnly) {
+        out.reason = "the given landmarks act instead (the paired extremities only tell an "
+                     "articulation, for the anchors)";
+    } else if (!(out.maxMotion > out.minMotion)) {
         std::ostringstream s;
         s << "every extremity moves by less than " << opts.autoLandmarkMinMotion
           << " sigma of the first level (at most " << out.maxMotion << " against " << out.minMotion
@@ -389,16 +402,18 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         out.reason = s.str();
         return out;
     }
-    out.used = true;
-    out.lastLevel = opts.multiscale.minLevel + opts.autoLandmarkLevels - 1;
     const auto world = [&](const Vec<D>& p) {
         return placement.toWorld(openvdb::Vec3d(p[0], p[1], D == 3 ? p[D - 1] : 0.5));
     };
-    for (const auto& [i, j] : pairing.pairs) {
-        openvdb::Vec3d wa = world(a.points[i]), wb = world(b.points[j]);
-        if (D == 2) wa[2] = wb[2] = 0;
-        out.source.push_back(wa);
-        out.target.push_back(wb);
+    if (!anchorsOnly) {
+        out.used = true;
+        out.lastLevel = opts.multiscale.minLevel + opts.autoLandmarkLevels - 1;
+        for (const auto& [i, j] : pairing.pairs) {
+            openvdb::Vec3d wa = world(a.points[i]), wb = world(b.points[j]);
+            if (D == 2) wa[2] = wb[2] = 0;
+            out.source.push_back(wa);
+            out.target.push_back(wb);
+        }
     }
     // Anchors only when some extremity stays while another moves (ANCHOR_STILL_RATIO): the
     // motion is then articulated, and what coincides in both shapes kept its place. When every
@@ -733,10 +748,16 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         result.autoLandmarks.requested = true;
         result.autoLandmarks.reason = "the run starts from an earlier result";
     } else if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
-        result.autoLandmarks = autoLandmarks(unitSource, unitTarget, placement, opts, correlated);
+        result.autoLandmarks =
+            autoLandmarks(unitSource, unitTarget, placement, opts, correlated, false);
         lastLandmarkLevel = result.autoLandmarks.lastLevel;
         opts.sourceLandmarks = result.autoLandmarks.source;
         opts.targetLandmarks = result.autoLandmarks.target;
+    } else if (opts.autoAnchors && opts.landmarkAnchors && !opts.sourceLandmarks.empty() &&
+               !opts.initial) {
+        // The given landmarks act at every level; the extremities only decide the anchors.
+        result.autoLandmarks =
+            autoLandmarks(unitSource, unitTarget, placement, opts, correlated, true);
     }
     if (result.autoLandmarks.requested && observer.autoLandmarks)
         observer.autoLandmarks(result.autoLandmarks);

@@ -259,12 +259,20 @@ struct MatchOptions
     /// legs spread 25 degrees (0.997 sigma) showed to be fragile (docs/numerics.md).
     double autoLandmarkMinMotion = 0;
     /// Automatic anchors, an addition to the paper (docs/numerics.md "Automatic anchors"): when
-    /// the automatic landmarks act and the motion is an articulation (ANCHOR_STILL_RATIO),
+    /// the automatic landmarks act (or landmarks are given, with landmarkAnchors) and the
+    /// motion is an articulation (ANCHOR_STILL_RATIO),
     /// points of M1 around which M2 coincides with it (geometry/StillAnchors.h) are held still,
     /// phi(x) = x, by a soft term of total weight anchorWeight (each anchor anchorWeight / count)
     /// at every level: what the motion left in place stays, instead of sliding along its own
     /// surface toward the moving limb. On in defaults(), off in paper().
     bool autoAnchors = false;
+    /// With autoAnchors and given landmarks (sourceLandmarks), an addition to the paper: the
+    /// extremities are still found and paired, only to tell an articulation, and the anchors
+    /// then act at every level beside the given landmarks (which replace the automatic ones).
+    /// Without it, landmarks given by the caller turned the anchors off, and true extremities
+    /// given as landmarks matched the benchmark's swung limbs 2-2.6x worse than none
+    /// (docs/numerics.md "Automatic anchors"). On in defaults(), off in paper().
+    bool landmarkAnchors = false;
     /// Tolerance, radius and count (Omega units); paper(dim) and defaults(dim) set the count per
     /// dimension (DEFAULT_ANCHOR_COUNT_2D/3D), as they set anchorWeight.
     StillAnchorOptions anchorOptions;
@@ -386,12 +394,15 @@ struct LandmarkResidual
 /// What MatchOptions::autoLandmarks found.
 struct AutoLandmarkSummary
 {
-    bool requested = false; ///< autoLandmarks was set and no landmarks were given
-    bool used = false;      ///< the pairs acted as landmarks
-    std::string reason;     ///< why not, when requested && !used
-    bool paired = false;    ///< the extremities were paired (used, or every pair moved too little)
-    double maxMotion = 0;   ///< largest |a_k - b_k| of the pairs, Omega units
-    double minMotion = 0;   ///< the threshold, autoLandmarkMinMotion sigma of the first level
+    /// autoLandmarks was set and no landmarks were given, or landmarks were given and
+    /// MatchOptions::landmarkAnchors asked for the anchors (then used is false: the extremities
+    /// only decide the anchors)
+    bool requested = false;
+    bool used = false;    ///< the pairs acted as landmarks
+    std::string reason;   ///< why not, when requested && !used
+    bool paired = false;  ///< the extremities were paired (used, or every pair moved too little)
+    double maxMotion = 0; ///< largest |a_k - b_k| of the pairs, Omega units
+    double minMotion = 0; ///< the threshold, autoLandmarkMinMotion sigma of the first level
     std::size_t sourceExtremities = 0, targetExtremities = 0;
     double distortion = 0;      ///< of the pairing (ExtremityPairing::distortion)
     std::size_t candidates = 0; ///< pairings within the tolerance (ExtremityPairing::candidates)

@@ -79,6 +79,7 @@ def match(
     auto_landmark_levels: int | None = None,
     auto_landmark_min_motion: float | None = None,
     auto_anchors: str | None = None,
+    landmark_anchors: str | None = None,
     anchor_weight: float | None = None,
     anchor_count: int | None = None,
     anchor_radius: float | None = None,

@@ -287,6 +287,8 @@ assert 0 < noise["source"] < 1e-3 and 0 < noise["target"] < 1e-3, noise
 # larger of the two readings' (these noise-free level sets read ~1e-4 on the lattice)
 assert paper["latticeNoiseSmoothing"] == 0 and default["latticeNoiseSmoothing"] == 3.5, (paper, default)
 assert paper["anchorNoiseTolerance"] == 0 and default["anchorNoiseTolerance"] == 1.6, (paper, default)
+# the anchors beside given landmarks (an addition): off in the paper's preset
+assert paper["landmarkAnchors"] == "off" and default["landmarkAnchors"] == "on", (paper, default)
 assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
 for i, shape in enumerate(("source", "target")):
     assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],
@@ -321,6 +323,11 @@ check anchor-noise-tolerance-negative 1 '' '--anchor-noise-tolerance must be a f
 check anchor-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/aold" --config "$SCRATCH/old_anchor.json" --levels 3..3 --quiet
 count=$((count + 1))
 if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["anchorNoiseTolerance"] == 0 and p["latticeNoiseSmoothing"] == 3.5, p' "$SCRATCH/aold/report.json"; then echo "ok   anchor-noise-old-report"; else fail "anchor-noise-old-report"; fi
+# ... and one before the anchors beside given landmarks, without them.
+"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("landmarkAnchors"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_lmanchors.json"
+check landmark-anchors-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/laold" --config "$SCRATCH/old_lmanchors.json" --levels 3..3 --quiet
+count=$((count + 1))
+if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["landmarkAnchors"] == "off" and p["autoAnchors"] == "on", p' "$SCRATCH/laold/report.json"; then echo "ok   landmark-anchors-old-report"; else fail "landmark-anchors-old-report"; fi
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
@@ -503,9 +510,15 @@ assert L["count"] == 3 and L["source"].endswith("lm_a.csv") and L["target"].ends
 assert L["meanWorld"] < 0.5 * L["startMeanWorld"], L
 assert lm["parameters"]["landmarks"] == [L["source"], L["target"]]
 assert lm["result"]["terms"]["landmarks"] > 0
-# Given landmarks replace the automatic ones; by default the finest level's landmark term is
-# that of the automatic anchors (the automatic landmarks act at levels 4..5 only).
-assert "autoLandmarks" not in lm and plain["autoLandmarks"]["used"], plain["autoLandmarks"]
+# Given landmarks replace the automatic ones; the extremities, still paired, only decide the
+# automatic anchors, which act beside them (--landmark-anchors on, the default): the same
+# anchors as without landmarks. By default the finest level's landmark term is that of the
+# automatic anchors (the automatic landmarks act at levels 4..5 only).
+A = lm["autoLandmarks"]
+assert not A["used"] and "given landmarks" in A["reason"] and A["pairs"] == [], A
+assert plain["autoLandmarks"]["used"], plain["autoLandmarks"]
+assert A["anchors"] == plain["autoLandmarks"]["anchors"] > 0, (A, plain["autoLandmarks"])
+assert lm["parameters"]["landmarkAnchors"] == "on"
 assert (plain["result"]["terms"]["landmarks"] > 0) == (plain["autoLandmarks"]["anchors"] > 0)
 assert "landmarks" not in plain and "landmarks" not in plain["parameters"]
 assert lm["result"]["residual"]["meanUnit"] < lm["levels"][-1]["h"] / 2
@@ -524,6 +537,7 @@ PY
     check match-2d-auto-landmarks 0 'automatic landmarks: 5 extremities paired .*, with [0-9]+ still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2a" --levels 4..6
     check match-2d-auto-landmarks-no-anchors 0 'automatic landmarks: 5 extremities paired \(distortion [0-9.]*, largest motion [0-9.e-]* > 0 of the unit box\), acting at levels 4..5$' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2n" --levels 4..6 --auto-anchors off
     check auto-anchors-bad 1 '' "--auto-anchors expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --auto-anchors 1 --quiet
+    check landmark-anchors-bad 1 '' "--landmark-anchors expects 'on' or 'off'" -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --landmark-anchors yes --quiet
     check anchor-count-bad 1 '' '--anchor-count must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-count 0 --quiet
     check anchor-weight-bad 3 '' 'anchorWeight must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-weight -1 --quiet
     check anchor-radius-bad 3 '' 'the anchor tolerance and radius must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-radius -0.1 --quiet

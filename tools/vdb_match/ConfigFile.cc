@@ -59,6 +59,7 @@ configKeys()
         {"autoLandmarkLevels", "--auto-landmark-levels"},
         {"autoLandmarkMinMotion", "--auto-landmark-min-motion"},
         {"autoAnchors", "--auto-anchors"},
+        {"landmarkAnchors", "--landmark-anchors"},
         {"secondPath", "--second-path"},
         {"secondPathShare", "--second-path-share"},
         {"secondPathTarget", "--second-path-target"},
@@ -165,6 +166,12 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("autoAnchors")) {
         settings.push_back({"autoAnchors", "--auto-anchors", "off"});
+    }
+    // ... and one before the anchors beside given landmarks (no landmarkAnchors) had none with
+    // --landmarks.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("landmarkAnchors")) {
+        settings.push_back({"landmarkAnchors", "--landmark-anchors", "off"});
     }
     // ... and one before the inner-distance term (no innerDistanceWeight) had none.
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&

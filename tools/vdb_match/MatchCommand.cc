@@ -106,8 +106,9 @@ struct MatchCliOptions
     std::optional<bool> autoLandmarks; ///< --auto-landmarks on|off (default per preset)
     int autoLandmarkLevels = MatchOptions::defaults(3).autoLandmarkLevels;
     double autoLandmarkMinMotion = MatchOptions::defaults(3).autoLandmarkMinMotion;
-    std::optional<bool> autoAnchors; ///< --auto-anchors on|off (default per preset)
-    std::optional<bool> secondPath;  ///< --second-path on|off (default per preset)
+    std::optional<bool> autoAnchors;     ///< --auto-anchors on|off (default per preset)
+    std::optional<bool> landmarkAnchors; ///< --landmark-anchors on|off (default per preset)
+    std::optional<bool> secondPath;      ///< --second-path on|off (default per preset)
     double secondPathShare = DEFAULT_SECOND_PATH_SHARE;
     bool secondPathTarget = false;              ///< --second-path-target on|off
     std::optional<double> anchorWeight;         ///< --anchor-weight (default per dimension)
@@ -136,22 +137,23 @@ struct MatchCliOptions
 std::string
 autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
 {
-    if (!a.used) return "automatic landmarks: not used: " + a.reason;
+    const std::string anchors =
+        a.anchors.empty()
+            ? (a.anchorReason.empty() ? std::string() : "; no anchors: " + a.anchorReason)
+            : ", with " + std::to_string(a.anchors.size()) +
+                  " still anchors at every level (M1 and M2 coincide on " +
+                  fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices" +
+                  (a.anchorTolerance > tolerance
+                       ? ", within " + fixed("%.2e", a.anchorTolerance) +
+                             " of the unit box: the tolerance follows the noise"
+                       : std::string()) +
+                  ")";
+    if (!a.used) return "automatic landmarks: not used: " + a.reason + anchors;
     return "automatic landmarks: " + std::to_string(a.source.size()) +
            " extremities paired (distortion " + fixed("%.3f", a.distortion) + ", largest motion " +
            fixed("%.3g", a.maxMotion) + " > " + fixed("%.3g", a.minMotion) +
            " of the unit box), acting at levels " + std::to_string(firstLevel) + ".." +
-           std::to_string(a.lastLevel) +
-           (a.anchors.empty()
-                ? (a.anchorReason.empty() ? std::string() : "; no anchors: " + a.anchorReason)
-                : ", with " + std::to_string(a.anchors.size()) +
-                      " still anchors at every level (M1 and M2 coincide on " +
-                      fixed("%.0f", 100 * a.anchorCoincidentShare) + "% of their vertices" +
-                      (a.anchorTolerance > tolerance
-                           ? ", within " + fixed("%.2e", a.anchorTolerance) +
-                                 " of the unit box: the tolerance follows the noise"
-                           : std::string()) +
-                      ")");
+           std::to_string(a.lastLevel) + anchors;
 }
 
 /// One line on the inner-distance term before the first level: its fields, or why it does not
@@ -550,13 +552,24 @@ matchOptionTable()
              o.autoLandmarkMinMotion = parseDouble("--auto-landmark-min-motion", v);
          }},
         {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
-         "when the automatic landmarks act and some extremity stays while another moves (at "
+         "when the automatic landmarks act (or --landmarks are given, with --landmark-anchors "
+         "on) and some extremity stays while another moves (at "
          "least twice as far): hold still, at every level, up to --anchor-count points of M1 "
          "and M2 around which the other shape coincides (what the articulation left in place; "
          "the same points either way round; docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
              "; --preset paper: off)",
          [](O& o, const std::string& v) { o.autoAnchors = parseOnOff("--auto-anchors", v); }},
+        {"--landmark-anchors", "on|off", "Landmarks (an addition to the paper)",
+         "with --landmarks and --auto-anchors on: find and pair the extremities anyway, only to "
+         "tell an articulation, and then hold the automatic anchors at every level beside the "
+         "given landmarks (off: given landmarks turn the anchors off, as before 2026-11-29; "
+         "docs/numerics.md) (default " +
+             std::string(MatchOptions::defaults(3).landmarkAnchors ? "on" : "off") +
+             "; --preset paper: off)",
+         [](O& o, const std::string& v) {
+             o.landmarkAnchors = parseOnOff("--landmark-anchors", v);
+         }},
         {"--anchor-weight", "X", "Landmarks (an addition to the paper)",
          "c_an, the total weight of the automatic anchors, >= 0 (default " +
              both(DEFAULT_ANCHOR_WEIGHT_3D, DEFAULT_ANCHOR_WEIGHT_2D) + ")",
@@ -1118,6 +1131,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"autoLandmarkLevels", opts.autoLandmarkLevels},
              {"autoLandmarkMinMotion", opts.autoLandmarkMinMotion},
              {"autoAnchors", opts.autoAnchors ? "on" : "off"},
+             {"landmarkAnchors", opts.landmarkAnchors ? "on" : "off"},
              {"anchorWeight", opts.anchorWeight},
              {"anchorCount", opts.anchorOptions.count},
              {"anchorRadius", opts.anchorOptions.radius},
@@ -1352,6 +1366,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.autoLandmarkLevels = o.autoLandmarkLevels;
     opts.autoLandmarkMinMotion = o.autoLandmarkMinMotion;
     if (o.autoAnchors) opts.autoAnchors = *o.autoAnchors;
+    if (o.landmarkAnchors) opts.landmarkAnchors = *o.landmarkAnchors;
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
     if (o.innerDistanceWeight) opts.innerDistanceWeight = *o.innerDistanceWeight;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;
