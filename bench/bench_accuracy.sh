@@ -32,7 +32,7 @@
 #               than make_pairs.py); default: a temporary directory, removed at the end
 #   --extra     more vdb_match match options, e.g. --extra "--threads 1 --energy-tolerance 3e-2"
 #               (--threads is also passed to consistency)
-#   --landmarks give vdb_match the pair's landmarks (make_pairs.py: 5 extremities of the source
+#   --landmarks give vdb_match the pair's landmarks (make_pairs.py: 5 farthest-point samples of the source
 #               and their true images), forward A B and reverse B A
 #   --resampled match against the target sampled independently of the source (make_pairs.py
 #               target_resampled.*: re-meshed from its level set in 3D, resampled by arc length

@@ -269,8 +269,9 @@ struct MatchOptions
     /// With autoAnchors and given landmarks (sourceLandmarks), an addition to the paper: the
     /// extremities are still found and paired, only to tell an articulation, and the anchors
     /// then act at every level beside the given landmarks (which replace the automatic ones).
-    /// Without it, landmarks given by the caller turned the anchors off, and true extremities
-    /// given as landmarks matched the benchmark's swung limbs 2-2.6x worse than none
+    /// Without it, landmarks given by the caller turned the anchors off, and the benchmark's
+    /// true landmarks (five points and their images under g, make_pairs.py) matched its swung
+    /// limbs 2-2.6x worse than none
     /// (docs/numerics.md "Automatic anchors"). On in defaults(), off in paper().
     bool landmarkAnchors = false;
     /// Tolerance, radius and count (Omega units); paper(dim) and defaults(dim) set the count per

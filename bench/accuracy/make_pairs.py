@@ -51,8 +51,10 @@ Output: one directory per pair, holding
   target_scan.obj / .polyline: target_resampled with Gaussian noise of std 0.2% of the
              source's box diagonal on every vertex (a scanner's error; same faces), for
              bench_accuracy.sh --scan and compare_peers.sh --scan;
-  landmarks_source.csv, landmarks_target.csv: 5 extremities of the source (farthest-point
-             sampling from the vertex farthest from the centroid) and their images g(v), for
+  landmarks_source.csv, landmarks_target.csv: 5 points of the source (farthest-point
+             sampling from the vertex farthest from the centroid: the creature's arm tips; the
+             animal's tail, head, two feet and a point of its flank; the figure's head, hands,
+             right foot and a point of its crotch) and their images g(v), for
              vdb_match --landmarks (bench_accuracy.sh --landmarks);
   pair.json: name, dimension, shape, kind, description, vertex count, mean/max motion
              |g(v) - v| (world and as a fraction of the source's bounding-box diagonal),
@@ -845,8 +847,9 @@ def scan_target(resampled, diagonal, name):
 
 
 def landmark_indices(points, count=LANDMARKS):
-    """Farthest-point sampling from the vertex farthest from the centroid: the extremities
-    (limb tips, head, feet), deterministic."""
+    """Farthest-point sampling from the vertex farthest from the centroid, deterministic:
+    mostly extremities (limb tips, head, feet), but on the figure the crotch comes before the
+    left foot and on the animal a point of the flank before two of its feet."""
     chosen = [int(np.argmax(np.linalg.norm(points - points.mean(axis=0), axis=1)))]
     dist = np.linalg.norm(points - points[chosen[0]], axis=1)
     while len(chosen) < count:

@@ -7,8 +7,8 @@ on benchmark pairs with a known map (bench/accuracy/make_pairs.py), levels 4..7 
   threshold of the landmarks (--auto-landmark-min-motion 1); without them the legs are reached
   only by the second path and with twice the error, with them (by default, on every pair) the
   first path reaches them;
-- the arms raised to horizontal again, with the pair's true extremities given as landmarks
-  (--landmarks): the anchors act beside them (--landmark-anchors on, the default), and the body
+- the arms raised to horizontal again, with the pair's true landmarks given (--landmarks: the
+  head, the hands, a foot and a point of the crotch, with their images under g): the anchors act beside them (--landmark-anchors on, the default), and the body
   stays; with --landmark-anchors off (the behaviour before 2026-11-29) given landmarks turned
   the anchors off and the body slid."""
 
