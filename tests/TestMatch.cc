@@ -858,13 +858,17 @@ TEST(Match, AnchorsActBesideGivenLandmarks)
     EXPECT_TRUE(s.paired);
     EXPECT_FALSE(s.used); // the given landmarks act, not the extremities
     EXPECT_NE(s.reason.find("given landmarks"), std::string::npos) << s.reason;
-    EXPECT_TRUE(s.source.empty() && s.target.empty());
+    // The paired extremities are reported (and feed the 2D inner-distance term), not landmarks.
+    EXPECT_EQ(s.source.size(), arms.size());
+    EXPECT_EQ(s.target.size(), arms.size());
+    EXPECT_TRUE(with.innerDistance.used) << with.innerDistance.reason;
     EXPECT_GT(s.anchors.size(), 10u) << s.anchorReason;
     EXPECT_EQ(with.landmarks.count, 1u);
     for (const MatchOptions& o : {off, noAnchors}) {
         const MatchResult<2> r = match<2>(a, b, placement, o);
         EXPECT_FALSE(r.autoLandmarks.requested);
         EXPECT_TRUE(r.autoLandmarks.anchors.empty());
+        EXPECT_FALSE(r.innerDistance.used);
         EXPECT_EQ(r.landmarks.count, 1u);
     }
     // A whole turn of the star is no articulation: no anchors beside the landmarks either.

@@ -349,8 +349,8 @@ namespace {
 /// world units out), and the anchors, sought with a tolerance of at least
 /// MatchOptions::anchorNoiseFactor times @a correlated, the shapes' correlated noise (Omega units).
 /// With @a anchorsOnly (MatchOptions::landmarkAnchors: the caller's landmarks act instead) the
-/// paired extremities only decide whether the motion is an articulation, and so whether the
-/// anchors act; they are not landmarks (used stays false, source and target empty).
+/// paired extremities are not landmarks (used stays false): they decide whether the motion is
+/// an articulation, and so whether the anchors act, and they are the inner-distance term's.
 template <int D>
 AutoLandmarkSummary
 autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
@@ -392,8 +392,8 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     out.minMotion = opts.autoLandmarkMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
                     std::ldexp(1.0, -first);
     if (anchorsOnly) {
-        out.reason = "the given landmarks act instead (the paired extremities only tell an "
-                     "articulation, for the anchors)";
+        out.reason = "the given landmarks act instead; the paired extremities only decide the "
+                     "anchors and the inner distance";
     } else if (!(out.maxMotion > out.minMotion)) {
         std::ostringstream s;
         s << "every extremity moves by less than " << opts.autoLandmarkMinMotion
@@ -408,12 +408,12 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     if (!anchorsOnly) {
         out.used = true;
         out.lastLevel = opts.multiscale.minLevel + opts.autoLandmarkLevels - 1;
-        for (const auto& [i, j] : pairing.pairs) {
-            openvdb::Vec3d wa = world(a.points[i]), wb = world(b.points[j]);
-            if (D == 2) wa[2] = wb[2] = 0;
-            out.source.push_back(wa);
-            out.target.push_back(wb);
-        }
+    }
+    for (const auto& [i, j] : pairing.pairs) {
+        openvdb::Vec3d wa = world(a.points[i]), wb = world(b.points[j]);
+        if (D == 2) wa[2] = wb[2] = 0;
+        out.source.push_back(wa);
+        out.target.push_back(wb);
     }
     // Anchors only when some extremity stays while another moves (ANCHOR_STILL_RATIO): the
     // motion is then articulated, and what coincides in both shapes kept its place. When every
@@ -469,7 +469,7 @@ innerDistanceSamples(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     out.level = opts.innerDistanceLevel > 0
                     ? opts.innerDistanceLevel
                     : (D == 3 ? DEFAULT_INNER_DISTANCE_LEVEL_3D : DEFAULT_INNER_DISTANCE_LEVEL_2D);
-    if (!pairs.used) {
+    if (pairs.source.empty()) {
         out.reason = "the automatic landmarks do not act";
         return out;
     }
@@ -824,7 +824,21 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     // The inner-distance term (energy/InnerDistanceTerm.h), from the paired extremities.
     InnerDistanceSamples<D> inner;
     if (opts.innerDistanceWeight > 0) {
-        result.innerDistance = innerDistanceSamples(unitSource, unitTarget, landmarks,
+        // The paired extremities, Omega units: the automatic landmarks, or beside given ones
+        // (landmarkAnchors) the extremities that decided the anchors.
+        LandmarkPairs<D> extremities;
+        for (std::size_t k = 0; k < result.autoLandmarks.source.size(); ++k) {
+            const openvdb::Vec3d ua = placement.toUnit(result.autoLandmarks.source[k]);
+            const openvdb::Vec3d ub = placement.toUnit(result.autoLandmarks.target[k]);
+            Vec<D> a, b;
+            for (int i = 0; i < D; ++i) {
+                a[i] = ua[i];
+                b[i] = ub[i];
+            }
+            extremities.source.push_back(a);
+            extremities.target.push_back(b);
+        }
+        result.innerDistance = innerDistanceSamples(unitSource, unitTarget, extremities,
                                                     result.autoLandmarks, opts, inner);
         if (observer.innerDistance) observer.innerDistance(result.innerDistance);
     }

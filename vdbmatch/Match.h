@@ -267,8 +267,9 @@ struct MatchOptions
     /// surface toward the moving limb. On in defaults(), off in paper().
     bool autoAnchors = false;
     /// With autoAnchors and given landmarks (sourceLandmarks), an addition to the paper: the
-    /// extremities are still found and paired, only to tell an articulation, and the anchors
-    /// then act at every level beside the given landmarks (which replace the automatic ones).
+    /// extremities are still found and paired, not as landmarks (the given ones replace them)
+    /// but to tell an articulation, and the anchors then act at every level beside the given
+    /// landmarks, with the inner-distance term from those extremities (innerDistanceWeight).
     /// Without it, landmarks given by the caller turned the anchors off, and the benchmark's
     /// true landmarks (five points and their images under g, make_pairs.py) matched its swung
     /// limbs 2-2.6x worse than none
@@ -287,7 +288,8 @@ struct MatchOptions
     double anchorNoiseFactor = 0;
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
     /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):
-    /// when the automatic landmarks and anchors act (an articulation: a stretch or a twist
+    /// when the extremities are paired (the automatic landmarks, or beside given landmarks with
+    /// landmarkAnchors) and the anchors act (an articulation: a stretch or a twist
     /// changes the inner distance itself), c_F times the mean over M1 of
     /// max(|F2_k(phi(x)) - F1_k(x)| - tau, 0)^2, F1_k and F2_k the inner distances from the
     /// paired extremity k of each shape, k the one nearest to x in M1 (geometry/InnerDistance.h,

@@ -561,10 +561,10 @@ matchOptionTable()
              "; --preset paper: off)",
          [](O& o, const std::string& v) { o.autoAnchors = parseOnOff("--auto-anchors", v); }},
         {"--landmark-anchors", "on|off", "Landmarks (an addition to the paper)",
-         "with --landmarks and --auto-anchors on: find and pair the extremities anyway, only to "
-         "tell an articulation, and then hold the automatic anchors at every level beside the "
-         "given landmarks (off: given landmarks turn the anchors off, as before 2026-11-29; "
-         "docs/numerics.md) (default " +
+         "with --landmarks and --auto-anchors on: find and pair the extremities anyway, not as "
+         "landmarks but to tell an articulation, and then hold the automatic anchors at every "
+         "level beside the given landmarks, with the inner-distance term from those extremities "
+         "(off: given landmarks turn both off, as before 2026-11-29; docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).landmarkAnchors ? "on" : "off") +
              "; --preset paper: off)",
          [](O& o, const std::string& v) {
