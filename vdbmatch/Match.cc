@@ -452,7 +452,7 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
 }
 
 /// MatchOptions::innerDistanceWeight: F1_k, F2_k from each pair k of extremities (@a landmarks,
-/// Omega units: the automatic landmarks when @a pairs says they are used) and the vertices of
+/// Omega units: @a pairs' paired extremities, landmarks or beside given ones) and the vertices of
 /// M1 with their shares of its measure and nearest extremity; @a samples stays empty when the
 /// term does not act (the summary says why).
 template <int D>

@@ -399,7 +399,7 @@ struct AutoLandmarkSummary
 {
     /// autoLandmarks was set and no landmarks were given, or landmarks were given and
     /// MatchOptions::landmarkAnchors asked for the anchors (then used is false: the extremities
-    /// only decide the anchors)
+    /// only decide the anchors and the inner-distance term)
     bool requested = false;
     bool used = false;    ///< the pairs acted as landmarks
     std::string reason;   ///< why not, when requested && !used
@@ -409,7 +409,9 @@ struct AutoLandmarkSummary
     std::size_t sourceExtremities = 0, targetExtremities = 0;
     double distortion = 0;      ///< of the pairing (ExtremityPairing::distortion)
     std::size_t candidates = 0; ///< pairings within the tolerance (ExtremityPairing::candidates)
-    /// The pairs, world units (2D: z = 0), row k of each.
+    /// The paired extremities, world units (2D: z = 0), row k of each: the landmarks when used,
+    /// else (beside given landmarks) what decided the anchors and the inner-distance term; empty
+    /// when not paired, or when the pairs moved too little to act (autoLandmarkMinMotion).
     std::vector<openvdb::Vec3d> source, target;
     int lastLevel = 0; ///< the landmarks act at the levels up to this one
     /// Automatic anchors (MatchOptions::autoAnchors), world units (2D: z = 0); they act at
