@@ -879,6 +879,23 @@ TEST(Match, AnchorsActBesideGivenLandmarks)
     EXPECT_TRUE(turn.autoLandmarks.anchors.empty());
     EXPECT_NE(turn.autoLandmarks.anchorReason.find("move alike"), std::string::npos)
         << turn.autoLandmarks.anchorReason;
+    // Shapes whose extremities cannot be paired (a circle has none, an ellipse two): the given
+    // landmark acts alone, and the summary says why there are no anchors.
+    MatchOptions round = MatchOptions::defaults(2);
+    round.multiscale.minLevel = round.multiscale.maxLevel = 4;
+    round.multiscale.descent.maxIterations = 0;
+    round.sourceLandmarks = {openvdb::Vec3d(5.0, -1.0, 0)};
+    round.targetLandmarks = {openvdb::Vec3d(6.0, -0.8, 0)};
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
+    const MatchResult<2> unpaired =
+        match<2>(circle, ellipse, placeInUnitBox(circle, ellipse, round.margin), round);
+    EXPECT_TRUE(unpaired.autoLandmarks.requested);
+    EXPECT_FALSE(unpaired.autoLandmarks.paired);
+    EXPECT_TRUE(unpaired.autoLandmarks.anchors.empty());
+    EXPECT_NE(unpaired.autoLandmarks.anchorReason.find("cannot be paired"), std::string::npos)
+        << unpaired.autoLandmarks.anchorReason;
+    EXPECT_FALSE(unpaired.innerDistance.used);
+    EXPECT_EQ(unpaired.landmarks.count, 1u);
 }
 
 /// The anchors' tolerance follows the noise (MatchOptions::anchorNoiseFactor, a 3D default): a
