@@ -48,6 +48,18 @@ toUnit(const UnitBoxPlacement& placement, const Vec<D>& world)
     return out;
 }
 
+/// A world point as the report and the options hold them (2D: z ignored), in Omega units.
+template <int D>
+Vec<D>
+toUnit(const UnitBoxPlacement& placement, const openvdb::Vec3d& world)
+{
+    const openvdb::Vec3d u = placement.toUnit(world);
+    Vec<D> out;
+    for (int a = 0; a < D; ++a)
+        out[a] = u[a];
+    return out;
+}
+
 template <int D>
 Vec<D>
 toWorld(const UnitBoxPlacement& placement, const Vec<D>& unit)
@@ -766,13 +778,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     LandmarkPairs<D> landmarks;
     landmarks.weight = Real(opts.landmarkWeight);
     for (std::size_t k = 0; k < opts.sourceLandmarks.size(); ++k) {
-        Vec<D> a, b;
-        const openvdb::Vec3d ua = placement.toUnit(opts.sourceLandmarks[k]);
-        const openvdb::Vec3d ub = placement.toUnit(opts.targetLandmarks[k]);
-        for (int i = 0; i < D; ++i) {
-            a[i] = ua[i];
-            b[i] = ub[i];
-        }
+        const Vec<D> a = toUnit<D>(placement, opts.sourceLandmarks[k]);
+        const Vec<D> b = toUnit<D>(placement, opts.targetLandmarks[k]);
         if (!a.allFinite() || !b.allFinite()) {
             OPENVDB_THROW(openvdb::ValueError, "match: landmark pair "
                                                    << k + 1
@@ -809,10 +816,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         guided.pairWeights.assign(k, Real(opts.landmarkWeight) / Real(k));
         anchored.weight = Real(opts.anchorWeight);
         for (const openvdb::Vec3d& w : result.autoLandmarks.anchors) {
-            const openvdb::Vec3d u = placement.toUnit(w);
-            Vec<D> a;
-            for (int i = 0; i < D; ++i)
-                a[i] = u[i];
+            const Vec<D> a = toUnit<D>(placement, w);
             guided.source.push_back(a);
             guided.target.push_back(a);
             guided.pairWeights.push_back(Real(opts.anchorWeight) / Real(n));
@@ -828,15 +832,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         // (landmarkAnchors) the extremities that decided the anchors.
         LandmarkPairs<D> extremities;
         for (std::size_t k = 0; k < result.autoLandmarks.source.size(); ++k) {
-            const openvdb::Vec3d ua = placement.toUnit(result.autoLandmarks.source[k]);
-            const openvdb::Vec3d ub = placement.toUnit(result.autoLandmarks.target[k]);
-            Vec<D> a, b;
-            for (int i = 0; i < D; ++i) {
-                a[i] = ua[i];
-                b[i] = ub[i];
-            }
-            extremities.source.push_back(a);
-            extremities.target.push_back(b);
+            extremities.source.push_back(toUnit<D>(placement, result.autoLandmarks.source[k]));
+            extremities.target.push_back(toUnit<D>(placement, result.autoLandmarks.target[k]));
         }
         result.innerDistance = innerDistanceSamples(unitSource, unitTarget, extremities,
                                                     result.autoLandmarks, opts, inner);

@@ -302,32 +302,26 @@ PY
 check noise-smoothing-negative 1 '' '--noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-smoothing -1 --quiet
 check lattice-noise-smoothing-negative 1 '' '--lattice-noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --lattice-noise-smoothing -1 --quiet
 check noise-bending-negative 1 '' '--noise-bending must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-bending -1 --quiet
-# A report of a version before the noise smoothing reproduces its run without it.
-"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_noise.json"
-check noise-smoothing-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/nold" --config "$SCRATCH/old_noise.json" --levels 3..3 --quiet
-count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); assert r["parameters"]["noiseSmoothing"] == 0 and "noise" not in r' "$SCRATCH/nold/report.json"; then echo "ok   noise-smoothing-old-report"; else fail "noise-smoothing-old-report"; fi
-# ... and one before the noise-adaptive bending weight, without it.
-"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("noiseBending"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_bending.json"
-check noise-bending-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/bold" --config "$SCRATCH/old_bending.json" --levels 3..3 --quiet
-count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["noiseBending"] == 0 and p["noiseSmoothing"] > 0, p' "$SCRATCH/bold/report.json"; then echo "ok   noise-bending-old-report"; else fail "noise-bending-old-report"; fi
-# ... and one before the lattice reading of the noise, with the vertex reading alone.
-"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("latticeNoiseSmoothing"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_lattice.json"
-check lattice-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/lold" --config "$SCRATCH/old_lattice.json" --levels 3..3 --quiet
-count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; n = r["noise"]; assert p["latticeNoiseSmoothing"] == 0 and n["lattice"] == [0, 0] and n["smoothingLength"][1] == p["noiseSmoothing"] * n["target"], r' "$SCRATCH/lold/report.json"; then echo "ok   lattice-noise-old-report"; else fail "lattice-noise-old-report"; fi
 check anchor-noise-tolerance-negative 1 '' '--anchor-noise-tolerance must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --anchor-noise-tolerance -1 --quiet
-# ... and one before the anchors' tolerance followed the noise, with the fixed tolerance.
-"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("anchorNoiseTolerance"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_anchor.json"
-check anchor-noise-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/aold" --config "$SCRATCH/old_anchor.json" --levels 3..3 --quiet
-count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["anchorNoiseTolerance"] == 0 and p["latticeNoiseSmoothing"] == 3.5, p' "$SCRATCH/aold/report.json"; then echo "ok   anchor-noise-old-report"; else fail "anchor-noise-old-report"; fi
-# ... and one before the anchors beside given landmarks, without them.
-"$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop("landmarkAnchors"); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_lmanchors.json"
-check landmark-anchors-old-config 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/laold" --config "$SCRATCH/old_lmanchors.json" --levels 3..3 --quiet
-count=$((count + 1))
-if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; assert p["landmarkAnchors"] == "off" and p["autoAnchors"] == "on", p' "$SCRATCH/laold/report.json"; then echo "ok   landmark-anchors-old-report"; else fail "landmark-anchors-old-report"; fi
+# A report of a version before an addition reproduces its run without it:
+# old_report NAME KEY ASSERTION drops parameters.KEY from the 3D report, reruns it with --config
+# and checks ASSERTION (Python, with r the new report and p its parameters).
+old_report() {
+    "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); r["parameters"].pop(sys.argv[3]); json.dump(r, open(sys.argv[2], "w"))' "$SCRATCH/m3/report.json" "$SCRATCH/old_$1.json" "$2"
+    check "$1-old-config" 0 '' '' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/old_$1" --config "$SCRATCH/old_$1.json" --levels 3..3 --quiet
+    count=$((count + 1))
+    if "$PYTHON" -c 'import json, sys; r = json.load(open(sys.argv[1])); p = r["parameters"]; exec("assert " + sys.argv[2])' "$SCRATCH/old_$1/report.json" "$3"; then echo "ok   $1-old-report"; else fail "$1-old-report"; fi
+}
+# ... the noise smoothing: without it;
+old_report noise-smoothing noiseSmoothing 'p["noiseSmoothing"] == 0 and "noise" not in r'
+# ... the noise-adaptive bending weight: without it;
+old_report noise-bending noiseBending 'p["noiseBending"] == 0 and p["noiseSmoothing"] > 0, p'
+# ... the lattice reading of the noise: with the vertex reading alone;
+old_report lattice-noise latticeNoiseSmoothing 'p["latticeNoiseSmoothing"] == 0 and r["noise"]["lattice"] == [0, 0] and r["noise"]["smoothingLength"][1] == p["noiseSmoothing"] * r["noise"]["target"], r'
+# ... the anchors' tolerance following the noise: with the fixed tolerance;
+old_report anchor-noise anchorNoiseTolerance 'p["anchorNoiseTolerance"] == 0 and p["latticeNoiseSmoothing"] == 3.5, p'
+# ... the anchors beside given landmarks: without them.
+old_report landmark-anchors landmarkAnchors 'p["landmarkAnchors"] == "off" and p["autoAnchors"] == "on", p'
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
