@@ -154,6 +154,7 @@ MatchOptions::defaults(int dim)
     opts.hessianLatticeNoiseFactor = dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0;
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
     opts.anchorNoiseFactor = dim == 3 ? DEFAULT_ANCHOR_NOISE_FACTOR_3D : 0.0;
+    opts.rigidLimbWeight = dim == 3 ? DEFAULT_RIGID_LIMB_WEIGHT_3D : 0.0;
     return opts;
 }
 
@@ -184,6 +185,20 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: autoLandmarkMinMotion must be finite and >= 0, got "
                           << autoLandmarkMinMotion);
+    }
+    if (!(rigidLimbWeight >= 0) || !std::isfinite(rigidLimbWeight)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: rigidLimbWeight must be finite and >= 0, got "
+                          << rigidLimbWeight);
+    }
+    if (!(rigidLimbMinMotion >= 0) || !std::isfinite(rigidLimbMinMotion)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: rigidLimbMinMotion must be finite and >= 0, got "
+                          << rigidLimbMinMotion);
+    }
+    if (!(rigidLimbOptions.count >= 2)) {
+        OPENVDB_THROW(openvdb::ValueError, "MatchOptions: the rigid limbs' count must be >= 2, got "
+                                               << rigidLimbOptions.count);
     }
     if (!(anchorWeight >= 0) || !std::isfinite(anchorWeight)) {
         OPENVDB_THROW(openvdb::ValueError,
@@ -457,6 +472,42 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             openvdb::Vec3d w = world(p);
             if (D == 2) w[2] = 0;
             out.anchors.push_back(w);
+        }
+        // Rigid limbs: the moving extremities' limbs, from the anchors' joint.
+        if (opts.rigidLimbWeight > 0 && !anchors.points.empty()) {
+            std::vector<Vec<D>> tipsA, tipsB;
+            for (const auto& [i, j] : pairing.pairs) {
+                tipsA.push_back(a.points[i]);
+                tipsB.push_back(b.points[j]);
+            }
+            RigidLimbOptions lo = opts.rigidLimbOptions;
+            lo.threaded = opts.threaded;
+            lo.minMotion = opts.rigidLimbMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
+                           std::ldexp(1.0, -first);
+            out.limbMinMotion = lo.minMotion;
+            const RigidLimbs<D> limbs =
+                findRigidLimbs<D>(unitSource, unitTarget, tipsA, tipsB, anchors.points, lo);
+            for (const RigidLimb<D>& l : limbs.limbs) {
+                AutoLandmarkSummary::Limb s;
+                s.extremity = l.extremity;
+                s.used = l.used;
+                s.reason = l.reason;
+                s.joint = l.joint;
+                s.sourceJoint = l.sourceJoint;
+                s.targetJoint = l.targetJoint;
+                s.residual = l.residual;
+                s.angle = l.angle;
+                s.axialTurn = l.axialTurn;
+                s.sourceVertices = l.sourceVertices;
+                s.targetVertices = l.targetVertices;
+                out.limbs.push_back(s);
+            }
+            for (std::size_t k = 0; k < limbs.source.size(); ++k) {
+                openvdb::Vec3d wa = world(limbs.source[k]), wb = world(limbs.target[k]);
+                if (D == 2) wa[2] = wb[2] = 0;
+                out.limbSource.push_back(wa);
+                out.limbTarget.push_back(wb);
+            }
         }
         out.seconds = secondsSince(start);
     }
@@ -809,6 +860,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     result.landmarks.count = landmarks.source.size();
     // Automatic anchors (geometry/StillAnchors.h): held still at every level, each with weight
     // c_an / N, beside the automatic landmarks (each c_lm / K) at their levels.
+    // The rigid limbs' points (geometry/RigidLimbs.h) beside them, each c_rl / M.
     LandmarkPairs<D> guided, anchored;
     if (!result.autoLandmarks.anchors.empty()) {
         const std::size_t k = landmarks.source.size(), n = result.autoLandmarks.anchors.size();
@@ -822,6 +874,20 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
             guided.pairWeights.push_back(Real(opts.anchorWeight) / Real(n));
             anchored.source.push_back(a);
             anchored.target.push_back(a);
+        }
+        const std::size_t m = result.autoLandmarks.limbSource.size();
+        // Without limbs the anchors keep their one weight (runs bitwise as before).
+        if (m > 0) anchored.pairWeights.assign(n, Real(opts.anchorWeight) / Real(n));
+        for (std::size_t i = 0; i < m; ++i) {
+            const Vec<D> a = toUnit<D>(placement, result.autoLandmarks.limbSource[i]);
+            const Vec<D> b = toUnit<D>(placement, result.autoLandmarks.limbTarget[i]);
+            const Real w = Real(opts.rigidLimbWeight) / Real(m);
+            guided.source.push_back(a);
+            guided.target.push_back(b);
+            guided.pairWeights.push_back(w);
+            anchored.source.push_back(a);
+            anchored.target.push_back(b);
+            anchored.pairWeights.push_back(w);
         }
     }
     const LandmarkPairs<D>& early = guided.source.empty() ? landmarks : guided;

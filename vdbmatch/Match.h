@@ -36,6 +36,7 @@
 
 #include <vdbmatch/Types.h>
 #include <vdbmatch/geometry/DistanceField.h>
+#include <vdbmatch/geometry/RigidLimbs.h>
 #include <vdbmatch/geometry/StillAnchors.h>
 #include <vdbmatch/geometry/Surface.h>
 #include <vdbmatch/geometry/SurfaceNoise.h>
@@ -102,6 +103,11 @@ constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 30000;
 /// leave coinciding parts that may have slid along themselves: docs/numerics.md "Automatic
 /// anchors".
 constexpr double ANCHOR_STILL_RATIO = 0.5;
+/// Default c_rl, the total weight of the rigid limbs' points (MatchOptions::rigidLimbWeight) in
+/// 3D: 20 points of one limb weigh 500 each, five times an anchor (docs/numerics.md "Rigid
+/// limbs"). 2D: off (a planar limb has no turn about its own axis to fix).
+constexpr double DEFAULT_RIGID_LIMB_WEIGHT_3D = 1e4;
+
 /// Default MatchOptions::anchorNoiseFactor in 3D: the anchors' tolerance is at least this times
 /// the shapes' correlated noise (correlatedNoise(), about 1.6 times its standard deviation), so
 /// about 2.5 standard deviations. A noisy scan then still coincides with the source where it
@@ -287,6 +293,20 @@ struct MatchOptions
     /// (paper()); defaults(): DEFAULT_ANCHOR_NOISE_FACTOR_3D in 3D, 0 in 2D.
     double anchorNoiseFactor = 0;
     double anchorWeight = DEFAULT_ANCHOR_WEIGHT_3D; ///< c_an >= 0, Omega units (defaults(dim))
+    /// Rigid limbs, an addition to the paper (docs/numerics.md "Rigid limbs"): when the anchors
+    /// act, each paired extremity that moved is the tip of a limb carried rigidly, without a
+    /// turn about its own axis (geometry/RigidLimbs.h); count points of each limb that the fit
+    /// finds rigid are held at every level at their images, beside the anchors, each with
+    /// weight rigidLimbWeight / (their number). A round limb's turn about its axis is what no
+    /// shape term sees (docs/results.md "The swung leg turns about its own axis"). c_rl = 0: off
+    /// (paper(), and defaults(2)); defaults(3): DEFAULT_RIGID_LIMB_WEIGHT_3D.
+    double rigidLimbWeight = 0;
+    /// Only the limbs whose extremity moved farther than this many sigma of the first level
+    /// (>= 0): a limb nearer than the first band is found by the match term from the start; one
+    /// beyond it is carried far by the coarse levels, which is where a round limb turns.
+    double rigidLimbMinMotion = 1;
+    RigidLimbOptions rigidLimbOptions; ///< reach, fit and count (Omega units; minMotion is set
+                                       ///< from rigidLimbMinMotion)
     /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):
     /// when the extremities are paired (the automatic landmarks, or beside given landmarks with
     /// landmarkAnchors) and the anchors act (an articulation: a stretch or a twist
@@ -425,6 +445,20 @@ struct AutoLandmarkSummary
     /// The tolerance the anchors were sought with (Omega units; MatchOptions::anchorNoiseFactor);
     /// 0 when they were not sought.
     double anchorTolerance = 0;
+    /// Rigid limbs (MatchOptions::rigidLimbWeight > 0, with the anchors): what the fit found of
+    /// each moving limb (Omega units, degrees), and the points held at every level with their
+    /// images, world units (2D: z = 0).
+    struct Limb
+    {
+        std::size_t extremity = 0; ///< row of source/target
+        bool used = false;
+        std::string reason;
+        double joint = 0, sourceJoint = 0, targetJoint = 0, residual = 0, angle = 0, axialTurn = 0;
+        std::size_t sourceVertices = 0, targetVertices = 0;
+    };
+    std::vector<Limb> limbs;
+    double limbMinMotion = 0; ///< the threshold, rigidLimbMinMotion sigma of the first level
+    std::vector<openvdb::Vec3d> limbSource, limbTarget;
     double seconds = 0;
 };
 

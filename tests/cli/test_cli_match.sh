@@ -289,6 +289,9 @@ assert paper["latticeNoiseSmoothing"] == 0 and default["latticeNoiseSmoothing"] 
 assert paper["anchorNoiseTolerance"] == 0 and default["anchorNoiseTolerance"] == 1.6, (paper, default)
 # the anchors beside given landmarks (an addition): off in the paper's preset
 assert paper["landmarkAnchors"] == "off" and default["landmarkAnchors"] == "on", (paper, default)
+# the rigid limbs (an addition): off in the paper's preset, 10^4 in 3D
+assert paper["rigidLimbWeight"] == 0 and default["rigidLimbWeight"] == 1e4, (paper, default)
+assert default["rigidLimbMinMotion"] == 1 and default["rigidLimbCount"] == 20 and default["rigidLimbReach"] == 0.6, default
 assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
 for i, shape in enumerate(("source", "target")):
     assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],
@@ -322,6 +325,8 @@ old_report lattice-noise latticeNoiseSmoothing 'p["latticeNoiseSmoothing"] == 0 
 old_report anchor-noise anchorNoiseTolerance 'p["anchorNoiseTolerance"] == 0 and p["latticeNoiseSmoothing"] == 3.5, p'
 # ... the anchors beside given landmarks: without them.
 old_report landmark-anchors landmarkAnchors 'p["landmarkAnchors"] == "off" and p["autoAnchors"] == "on", p'
+# ... the rigid limbs: without them.
+old_report rigid-limbs rigidLimbWeight 'p["rigidLimbWeight"] == 0 and p["autoAnchors"] == "on", p'
 check membrane-saturation-range 3 '' 'membrane saturation must be in \[0, ' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation -0.1 --quiet
 check membrane-saturation-number 1 '' "--membrane-saturation expects a finite number" -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation nan --quiet
 check membrane-saturation-levels-range 3 '' 'membraneSaturationLevels must be >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --membrane-saturation-levels -1 --quiet
@@ -536,6 +541,10 @@ PY
     check anchor-count-bad 1 '' '--anchor-count must be >= 1' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-count 0 --quiet
     check anchor-weight-bad 3 '' 'anchorWeight must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-weight -1 --quiet
     check anchor-radius-bad 3 '' 'the anchor tolerance and radius must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --anchor-radius -0.1 --quiet
+    check rigid-limb-weight-bad 3 '' 'rigidLimbWeight must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-weight -1 --quiet
+    check rigid-limb-min-motion-bad 3 '' 'rigidLimbMinMotion must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-min-motion -1 --quiet
+    check rigid-limb-count-bad 1 '' '--rigid-limb-count must be >= 2' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-count 1 --quiet
+    check rigid-limb-reach-bad 1 '' '--rigid-limb-reach must be in \(0, 0.8\]' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-reach 0.9 --quiet
     check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     check match-2d-anchor-count 0 'with [1-7] still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2c7" --levels 4..4 --anchor-count 7

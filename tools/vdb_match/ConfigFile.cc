@@ -68,6 +68,10 @@ configKeys()
         {"anchorRadius", "--anchor-radius"},
         {"anchorTolerance", "--anchor-tolerance"},
         {"anchorNoiseTolerance", "--anchor-noise-tolerance"},
+        {"rigidLimbWeight", "--rigid-limb-weight"},
+        {"rigidLimbMinMotion", "--rigid-limb-min-motion"},
+        {"rigidLimbCount", "--rigid-limb-count"},
+        {"rigidLimbReach", "--rigid-limb-reach"},
         {"innerDistanceWeight", "--inner-distance-weight"},
         {"innerDistanceTolerance", "--inner-distance-tolerance"},
         {"innerDistanceRatio", "--inner-distance-ratio"},
@@ -177,6 +181,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("landmarkWeight") &&
         !params.contains("innerDistanceWeight")) {
         settings.push_back({"innerDistanceWeight", "--inner-distance-weight", "0"});
+    }
+    // ... and one before the rigid limbs (no rigidLimbWeight) had none.
+    if (doc.contains("parameters") && params.contains("landmarkWeight") &&
+        !params.contains("rigidLimbWeight")) {
+        settings.push_back({"rigidLimbWeight", "--rigid-limb-weight", "0"});
     }
     // ... and one from before innerDistanceRatio kept every vertex of M1 in it.
     if (doc.contains("parameters") && params.contains("innerDistanceWeight") &&

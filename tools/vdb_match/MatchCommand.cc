@@ -116,6 +116,9 @@ struct MatchCliOptions
     StillAnchorOptions anchorOptions;           ///< --anchor-radius, --anchor-tolerance
     std::optional<double> anchorNoiseTolerance; ///< --anchor-noise-tolerance (per preset)
     std::optional<double> innerDistanceWeight;  ///< --inner-distance-weight (default per dimension)
+    std::optional<double> rigidLimbWeight;      ///< --rigid-limb-weight (default per dimension)
+    double rigidLimbMinMotion = MatchOptions().rigidLimbMinMotion; ///< --rigid-limb-min-motion
+    RigidLimbOptions rigidLimbOptions; ///< --rigid-limb-count, --rigid-limb-reach
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
@@ -148,12 +151,22 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
                              " of the unit box: the tolerance follows the noise"
                        : std::string()) +
                   ")";
-    if (!a.used) return "automatic landmarks: not used: " + a.reason + anchors;
+    std::string limbs;
+    for (const AutoLandmarkSummary::Limb& l : a.limbs) {
+        limbs += "; limb " + std::to_string(l.extremity + 1) +
+                 (l.used ? ": rigid, turned " + fixed("%.0f", l.angle) + " deg (fit " +
+                               fixed("%.2e", l.residual) + ")"
+                         : ": not held: " + l.reason);
+    }
+    if (!a.limbSource.empty())
+        limbs += ", " + std::to_string(a.limbSource.size()) + " limb points at every level";
+    const std::string rest = anchors + limbs;
+    if (!a.used) return "automatic landmarks: not used: " + a.reason + rest;
     return "automatic landmarks: " + std::to_string(a.source.size()) +
            " extremities paired (distortion " + fixed("%.3f", a.distortion) + ", largest motion " +
            fixed("%.3g", a.maxMotion) + " > " + fixed("%.3g", a.minMotion) +
            " of the unit box), acting at levels " + std::to_string(firstLevel) + ".." +
-           std::to_string(a.lastLevel) + anchors;
+           std::to_string(a.lastLevel) + rest;
 }
 
 /// One line on the inner-distance term before the first level: its fields, or why it does not
@@ -609,6 +622,41 @@ matchOptionTable()
              "used (docs/numerics.md \"The anchors' tolerance follows the noise\")",
          [](O& o, const std::string& v) {
              o.anchorNoiseTolerance = parseDouble("--anchor-noise-tolerance", v);
+         }},
+        {"--rigid-limb-weight", "X", "Landmarks (an addition to the paper)",
+         "c_rl, the total weight of the rigid limbs' points, >= 0: when the automatic anchors "
+         "act, each limb whose extremity moved and that one rigid motion carries from M1 to M2 "
+         "(fitted by closest points, without a turn about its own axis) has --rigid-limb-count "
+         "points held at their images at every level, so that a round limb does not turn about "
+         "its axis (docs/numerics.md \"Rigid limbs\"); 0: off (default " +
+             both(DEFAULT_RIGID_LIMB_WEIGHT_3D, 0.0) + "; --preset paper: 0)",
+         [](O& o, const std::string& v) {
+             o.rigidLimbWeight = parseDouble("--rigid-limb-weight", v);
+         }},
+        {"--rigid-limb-min-motion", "K", "Landmarks (an addition to the paper)",
+         "rigid limbs only for the extremities that moved farther than K sigma of the first "
+         "level, >= 0 (default " +
+             formatNumber(d.rigidLimbMinMotion) + ")",
+         [](O& o, const std::string& v) {
+             o.rigidLimbMinMotion = parseDouble("--rigid-limb-min-motion", v);
+         }},
+        {"--rigid-limb-count", "N", "Landmarks (an addition to the paper)",
+         "points per rigid limb, half on each shape, >= 2 (default " +
+             formatNumber(double(d.rigidLimbOptions.count)) + ")",
+         [](O& o, const std::string& v) {
+             const int n = parseInt("--rigid-limb-count", v);
+             if (n < 2) throw UsageError("--rigid-limb-count must be >= 2, got " + v);
+             o.rigidLimbOptions.count = std::size_t(n);
+         }},
+        {"--rigid-limb-reach", "X", "Landmarks (an addition to the paper)",
+         "a rigid limb is the part of the surface nearer its tip than X times the tip's geodesic "
+         "distance to the nearest anchor (the joint), 0 < X <= 0.8 (default " +
+             formatNumber(d.rigidLimbOptions.reach) + ")",
+         [](O& o, const std::string& v) {
+             const double x = parseDouble("--rigid-limb-reach", v);
+             if (!(x > 0 && x <= 0.8))
+                 throw UsageError("--rigid-limb-reach must be in (0, 0.8], got " + v);
+             o.rigidLimbOptions.reach = x;
          }},
         {"--inner-distance-weight", "X", "Landmarks (an addition to the paper)",
          "c_F of the inner-distance term, >= 0: when the automatic anchors act (an "
@@ -1137,6 +1185,10 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorRadius", opts.anchorOptions.radius},
              {"anchorTolerance", opts.anchorOptions.tolerance},
              {"anchorNoiseTolerance", opts.anchorNoiseFactor},
+             {"rigidLimbWeight", opts.rigidLimbWeight},
+             {"rigidLimbMinMotion", opts.rigidLimbMinMotion},
+             {"rigidLimbCount", opts.rigidLimbOptions.count},
+             {"rigidLimbReach", opts.rigidLimbOptions.reach},
              {"innerDistanceWeight", opts.innerDistanceWeight},
              {"innerDistanceTolerance", opts.innerDistanceTolerance},
              {"innerDistanceRatio", opts.innerDistanceRatio},
@@ -1169,6 +1221,25 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                  {"anchorReason", a.anchorReason.empty() ? Json() : Json(a.anchorReason)},
                  {"anchorTolerance", a.anchorTolerance},
                  {"seconds", a.seconds}};
+        if (!a.limbs.empty()) {
+            Json limbs = Json::array();
+            for (const AutoLandmarkSummary::Limb& l : a.limbs) {
+                limbs.push_back(Json{{"extremity", l.extremity},
+                                     {"used", l.used},
+                                     {"reason", l.used ? Json() : Json(l.reason)},
+                                     {"joint", l.joint},
+                                     {"sourceJoint", l.sourceJoint},
+                                     {"targetJoint", l.targetJoint},
+                                     {"sourceVertices", l.sourceVertices},
+                                     {"targetVertices", l.targetVertices},
+                                     {"residual", l.residual},
+                                     {"angleDegrees", l.angle},
+                                     {"axialTurnDegrees", l.axialTurn}});
+            }
+            j["autoLandmarks"]["rigidLimbs"] = limbs;
+            j["autoLandmarks"]["rigidLimbPoints"] = a.limbSource.size();
+            j["autoLandmarks"]["rigidLimbMinMotion"] = a.limbMinMotion;
+        }
         if (a.used) {
             j["autoLandmarks"]["startMeanWorld"] = r.landmarks.startMeanWorld;
             j["autoLandmarks"]["meanWorld"] = r.landmarks.meanWorld;
@@ -1369,6 +1440,9 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.landmarkAnchors) opts.landmarkAnchors = *o.landmarkAnchors;
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
     if (o.innerDistanceWeight) opts.innerDistanceWeight = *o.innerDistanceWeight;
+    if (o.rigidLimbWeight) opts.rigidLimbWeight = *o.rigidLimbWeight;
+    opts.rigidLimbOptions = o.rigidLimbOptions;
+    opts.rigidLimbMinMotion = o.rigidLimbMinMotion;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;
     opts.innerDistanceRatio = o.innerDistanceRatio;
     opts.innerDistanceLevel = o.innerDistanceLevel;

@@ -1,0 +1,216 @@
+/// @file TestRigidLimbs.cc
+/// @brief Tests of the rigid limbs of an articulation (geometry/RigidLimbs.h): a capsule swung
+/// 90 degrees about its base is found rigid, with the swing's angle, and its points go where
+/// the swing takes them, either way round (the samples of each shape at the other's
+/// preimages); a turn about the limb's own axis, which a flattened limb lets the fit see, is
+/// removed from the map and reported; a limb bent at a second joint is not rigid and is left out;
+/// tips that did not move, or no still point, give no limb; the thread count does not change the
+/// result.
+
+#include "support/TestSurfaces.h"
+
+#include <vdbmatch/geometry/RigidLimbs.h>
+
+#include <Eigen/Geometry>
+#include <gtest/gtest.h>
+#include <openvdb/Exceptions.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace vdbmatch;
+
+namespace {
+
+/// A capsule along z from its south pole at @a base, straight part @a length, radius @a radius
+/// (its cross-section's y semi-axis @a flatten times that), rings spaced about evenly in arc
+/// length, outward-oriented.
+Surface<3>
+capsule(const Vec<3>& base, double length, double radius, double flatten = 1.0, int segments = 32)
+{
+    // The profile (rho, z) from the north pole to the south pole, by arc length.
+    const double cap = 0.5 * M_PI * radius, total = 2 * cap + length;
+    const int rings = int(std::ceil(total / (2 * M_PI * radius / segments)));
+    auto profile = [&](double s, double& rho, double& z) {
+        if (s < cap) {
+            const double a = s / radius;
+            rho = radius * std::sin(a);
+            z = length + radius + radius * std::cos(a);
+        } else if (s < cap + length) {
+            rho = radius;
+            z = length + radius - (s - cap);
+        } else {
+            const double a = (s - cap - length) / radius;
+            rho = radius * std::cos(a);
+            z = radius - radius * std::sin(a);
+        }
+    };
+    Surface<3> m;
+    m.points.push_back(base + Vec<3>(0, 0, length + 2 * radius));
+    for (int i = 1; i < rings; ++i) {
+        double rho, z;
+        profile(total * i / rings, rho, z);
+        for (int j = 0; j < segments; ++j) {
+            const double phi = 2 * M_PI * j / segments;
+            m.points.push_back(base +
+                               Vec<3>(rho * std::cos(phi), flatten * rho * std::sin(phi), z));
+        }
+    }
+    m.points.push_back(base);
+    const int south = int(m.points.size()) - 1;
+    auto ring = [&](int i, int j) { return 1 + (i - 1) * segments + (j % segments); };
+    for (int j = 0; j < segments; ++j) {
+        m.elements.push_back({0, ring(1, j), ring(1, j + 1)});
+        for (int i = 1; i + 1 < rings; ++i) {
+            m.elements.push_back({ring(i, j), ring(i + 1, j), ring(i + 1, j + 1)});
+            m.elements.push_back({ring(i, j), ring(i + 1, j + 1), ring(i, j + 1)});
+        }
+        m.elements.push_back({south, ring(rings - 1, j + 1), ring(rings - 1, j)});
+    }
+    return m;
+}
+
+Mat<3>
+rotationAbout(const Vec<3>& axis, double degrees)
+{
+    return Eigen::AngleAxis<Real>(degrees * M_PI / 180.0, axis.normalized()).toRotationMatrix();
+}
+
+Surface<3>
+moved(Surface<3> s, const Mat<3>& R, const Vec<3>& pivot)
+{
+    for (Vec<3>& p : s.points)
+        p = R * (p - pivot) + pivot;
+    return s;
+}
+
+const Vec<3> BASE(0.3, 0.5, 0.3);
+constexpr double LENGTH = 0.3, RADIUS = 0.05;
+
+struct Swing
+{
+    Surface<3> source, target;
+    Mat<3> R;
+    std::vector<Vec<3>> sourceTips, targetTips, still;
+};
+
+/// The capsule swung by 90 degrees about y through its south pole (the joint, held still),
+/// after @a twist degrees about its own axis.
+Swing
+swing(double flatten, double twist)
+{
+    Swing s;
+    s.source = capsule(BASE, LENGTH, RADIUS, flatten);
+    s.R = rotationAbout(Vec<3>::UnitY(), 90.0);
+    s.target = moved(moved(s.source, rotationAbout(Vec<3>::UnitZ(), twist), BASE), s.R, BASE);
+    const Vec<3> tip = BASE + Vec<3>(0, 0, LENGTH + 2 * RADIUS);
+    s.sourceTips = {tip};
+    s.targetTips = {s.R * (tip - BASE) + BASE};
+    s.still = {BASE};
+    return s;
+}
+
+} // namespace
+
+TEST(RigidLimbs, SwungCapsuleIsRigidAndGoesWhereTheSwingTakesIt)
+{
+    const Swing s = swing(1.0, 0.0);
+    const RigidLimbs<3> limbs =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still);
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    const RigidLimb<3>& l = limbs.limbs[0];
+    ASSERT_TRUE(l.used) << l.reason;
+    // The joint is the tip's geodesic distance to the still south pole: the capsule's half
+    // circumference along a meridian, a little longer along the polygonal edges.
+    const double meridian = LENGTH + M_PI * RADIUS;
+    EXPECT_GT(l.joint, meridian * 0.999);
+    EXPECT_LT(l.joint, meridian * 1.05);
+    EXPECT_NEAR(l.angle, 90.0, 0.5);
+    EXPECT_LT(l.residual, 1e-3);
+    EXPECT_EQ(limbs.source.size(), RigidLimbOptions().count);
+    ASSERT_EQ(limbs.source.size(), limbs.target.size());
+    // Every pair is the swing of its source point, the samples of M2 at their preimages too.
+    for (std::size_t k = 0; k < limbs.source.size(); ++k) {
+        const Vec<3> truth = s.R * (limbs.source[k] - BASE) + BASE;
+        EXPECT_LT((limbs.target[k] - truth).norm(), 2e-3) << k;
+        // Only the limb, away from the joint: nearer the tip than reach * J.
+        EXPECT_LT((limbs.source[k] - s.sourceTips[0]).norm(), RigidLimbOptions().reach * l.joint);
+    }
+}
+
+TEST(RigidLimbs, TurnAboutTheLimbsAxisIsRemoved)
+{
+    // A flattened limb turned by 10 degrees about its own axis before the swing: the fit sees
+    // the turn, the map keeps only the swing.
+    const Swing s = swing(0.5, 10.0);
+    const RigidLimbs<3> limbs =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still);
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    const RigidLimb<3>& l = limbs.limbs[0];
+    ASSERT_TRUE(l.used) << l.reason;
+    EXPECT_NEAR(l.axialTurn, 10.0, 2.0);
+    EXPECT_NEAR(l.angle, 90.0, 1.0);
+    EXPECT_LT((l.rotation - s.R).norm(), 0.03);
+}
+
+TEST(RigidLimbs, BentLimbIsNotRigid)
+{
+    // Bent by 45 degrees three quarters along its straight part (a second joint inside the
+    // part the fit sees), then swung.
+    Swing s = swing(1.0, 0.0);
+    Surface<3> bent = s.source;
+    const Vec<3> knee = BASE + Vec<3>(0, 0, RADIUS + 0.75 * LENGTH);
+    const Mat<3> K = rotationAbout(Vec<3>::UnitY(), 45.0);
+    for (Vec<3>& p : bent.points)
+        if (p[2] > knee[2]) p = K * (p - knee) + knee;
+    s.target = moved(bent, s.R, BASE);
+    s.targetTips[0] = s.R * (K * (s.sourceTips[0] - knee) + knee - BASE) + BASE;
+    const RigidLimbs<3> limbs =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still);
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    EXPECT_FALSE(limbs.limbs[0].used);
+    EXPECT_NE(limbs.limbs[0].reason.find("not rigid"), std::string::npos) << limbs.limbs[0].reason;
+    EXPECT_GT(limbs.limbs[0].residual, RigidLimbOptions().maxResidual);
+    EXPECT_TRUE(limbs.source.empty());
+}
+
+TEST(RigidLimbs, StillTipsAndNoStillPointGiveNoLimb)
+{
+    const Swing s = swing(1.0, 0.0);
+    // The tip as its own partner: it did not move.
+    EXPECT_TRUE(
+        findRigidLimbs<3>(s.source, s.source, s.sourceTips, s.sourceTips, s.still).limbs.empty());
+    EXPECT_TRUE(
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, {}).limbs.empty());
+}
+
+TEST(RigidLimbs, BadInputThrows)
+{
+    const Swing s = swing(1.0, 0.0);
+    EXPECT_THROW(findRigidLimbs<3>(s.source, s.target, s.sourceTips, {}, s.still),
+                 openvdb::ValueError);
+    RigidLimbOptions o;
+    o.reach = 0.9;
+    o.targetReach = 0.8;
+    EXPECT_THROW(findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still, o),
+                 openvdb::ValueError);
+    const std::vector<Vec<3>> nan = {Vec<3>(std::nan(""), 0.5, 0.5)};
+    EXPECT_THROW(findRigidLimbs<3>(s.source, s.target, nan, s.targetTips, s.still),
+                 openvdb::ValueError);
+}
+
+TEST(RigidLimbs, ThreadCountDoesNotChangeTheResult)
+{
+    const Swing s = swing(0.6, 10.0);
+    RigidLimbOptions serial;
+    serial.threaded = false;
+    const RigidLimbs<3> a =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still);
+    const RigidLimbs<3> b =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still, serial);
+    ASSERT_EQ(a.source.size(), b.source.size());
+    for (std::size_t k = 0; k < a.source.size(); ++k) {
+        EXPECT_EQ(a.source[k], b.source[k]);
+        EXPECT_EQ(a.target[k], b.target[k]);
+    }
+}

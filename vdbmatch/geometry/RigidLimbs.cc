@@ -1,0 +1,378 @@
+#include <vdbmatch/Parallel.h>
+#include <vdbmatch/geometry/RigidLimbs.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/SVD>
+#include <openvdb/Exceptions.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <sstream>
+#include <utility>
+
+namespace vdbmatch {
+
+namespace {
+
+constexpr double FAR = std::numeric_limits<double>::infinity();
+constexpr double DEGREES = 180.0 / 3.14159265358979323846;
+
+/// Each vertex's share of the surface's measure: 1/D of each element's length or area.
+template <int D>
+std::vector<double>
+vertexShares(const Surface<D>& s)
+{
+    std::vector<double> w(s.points.size(), 0.0);
+    for (const auto& e : s.elements) {
+        double m;
+        if constexpr (D == 2) {
+            m = (s.points[std::size_t(e[1])] - s.points[std::size_t(e[0])]).norm();
+        } else {
+            const Vec<3> p = s.points[std::size_t(e[0])];
+            m = 0.5 *
+                (s.points[std::size_t(e[1])] - p).cross(s.points[std::size_t(e[2])] - p).norm();
+        }
+        for (int k = 0; k < D; ++k)
+            w[std::size_t(e[k])] += m / D;
+    }
+    return w;
+}
+
+/// Geodesic distance along the element edges from vertex @a from (Dijkstra; ties by index).
+template <int D>
+std::vector<double>
+edgeDistance(const Surface<D>& s, std::size_t from)
+{
+    const std::size_t n = s.points.size();
+    std::vector<std::vector<std::size_t>> next(n);
+    for (const auto& e : s.elements) {
+        for (int k = 0; k < D; ++k) {
+            const std::size_t i = std::size_t(e[k]), j = std::size_t(e[(k + 1) % D]);
+            next[i].push_back(j);
+            next[j].push_back(i);
+        }
+    }
+    std::vector<double> g(n, FAR);
+    using Item = std::pair<double, std::size_t>;
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+    g[from] = 0;
+    queue.push({0.0, from});
+    while (!queue.empty()) {
+        const auto [d, i] = queue.top();
+        queue.pop();
+        if (d > g[i]) continue;
+        for (std::size_t j : next[i]) {
+            const double dj = d + (s.points[i] - s.points[j]).norm();
+            if (dj < g[j]) {
+                g[j] = dj;
+                queue.push({dj, j});
+            }
+        }
+    }
+    return g;
+}
+
+template <int D>
+std::size_t
+nearestVertex(const Surface<D>& s, const Vec<D>& x)
+{
+    std::size_t best = 0;
+    double bestD = FAR;
+    for (std::size_t i = 0; i < s.points.size(); ++i) {
+        const double d = (s.points[i] - x).squaredNorm();
+        if (d < bestD) {
+            bestD = d;
+            best = i;
+        }
+    }
+    return best;
+}
+
+/// Weighted centroid and principal direction of the points @a idx, oriented towards @a tip.
+template <int D>
+void
+principalAxis(const Surface<D>& s, const std::vector<double>& w,
+              const std::vector<std::size_t>& idx, const Vec<D>& tip, Vec<D>& centre, Vec<D>& axis)
+{
+    double total = 0;
+    centre.setZero();
+    for (std::size_t i : idx) {
+        centre += w[i] * s.points[i];
+        total += w[i];
+    }
+    centre /= total;
+    Mat<D> cov = Mat<D>::Zero();
+    for (std::size_t i : idx) {
+        const Vec<D> d = s.points[i] - centre;
+        cov += w[i] * d * d.transpose();
+    }
+    Eigen::SelfAdjointEigenSolver<Mat<D>> eig(cov);
+    axis = eig.eigenvectors().col(D - 1).normalized();
+    if ((tip - centre).dot(axis) < 0) axis = -axis;
+}
+
+/// The least rotation taking the unit vector @a a to the unit vector @a b (3D: about a x b;
+/// opposite vectors: about an axis normal to a).
+template <int D>
+Mat<D>
+leastRotation(const Vec<D>& a, const Vec<D>& b)
+{
+    if constexpr (D == 2) {
+        const double angle = std::atan2(a[0] * b[1] - a[1] * b[0], a.dot(b));
+        Mat<2> r;
+        r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
+        return r;
+    } else {
+        const double c = a.dot(b);
+        Vec<3> k = a.cross(b);
+        double s = k.norm();
+        if (s < 1e-12) {
+            if (c > 0) return Mat<3>::Identity();
+            // Half a turn about any axis normal to a.
+            k = a.cross(std::abs(a[0]) < 0.9 ? Vec<3>::UnitX() : Vec<3>::UnitY()).normalized();
+            return 2.0 * k * k.transpose() - Mat<3>::Identity();
+        }
+        k /= s;
+        Mat<3> K;
+        K << 0, -k[2], k[1], k[2], 0, -k[0], -k[1], k[0], 0;
+        const double angle = std::atan2(s, c);
+        return Mat<3>::Identity() + std::sin(angle) * K + (1 - std::cos(angle)) * K * K;
+    }
+}
+
+template <int D>
+double
+rotationAngle(const Mat<D>& r)
+{
+    if constexpr (D == 2) {
+        return std::abs(std::atan2(r(1, 0), r(0, 0))) * DEGREES;
+    } else {
+        return std::acos(std::clamp(0.5 * (r.trace() - 1.0), -1.0, 1.0)) * DEGREES;
+    }
+}
+
+/// Farthest-point samples of the vertices @a idx, the first the one nearest @a start.
+template <int D>
+std::vector<std::size_t>
+farthestSamples(const Surface<D>& s, const std::vector<std::size_t>& idx, const Vec<D>& start,
+                std::size_t count)
+{
+    std::vector<std::size_t> out;
+    if (idx.empty() || count == 0) return out;
+    std::size_t first = 0;
+    double best = FAR;
+    for (std::size_t k = 0; k < idx.size(); ++k) {
+        const double d = (s.points[idx[k]] - start).squaredNorm();
+        if (d < best) {
+            best = d;
+            first = k;
+        }
+    }
+    std::vector<double> dist(idx.size(), FAR);
+    std::size_t current = first;
+    for (std::size_t n = 0; n < std::min(count, idx.size()); ++n) {
+        out.push_back(idx[current]);
+        std::size_t far = 0;
+        double farD = -1;
+        for (std::size_t k = 0; k < idx.size(); ++k) {
+            dist[k] = std::min(dist[k], (s.points[idx[k]] - s.points[idx[current]]).squaredNorm());
+            if (dist[k] > farD) {
+                farD = dist[k];
+                far = k;
+            }
+        }
+        current = far;
+    }
+    return out;
+}
+
+template <int D>
+void
+checkPoints(const std::vector<Vec<D>>& points, const char* what)
+{
+    for (const Vec<D>& p : points) {
+        if (!p.allFinite()) {
+            OPENVDB_THROW(openvdb::ValueError,
+                          "findRigidLimbs: a point of " << what << " is not finite");
+        }
+    }
+}
+
+} // namespace
+
+template <int D>
+RigidLimbs<D>
+findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
+               const std::vector<Vec<D>>& sourceTips, const std::vector<Vec<D>>& targetTips,
+               const std::vector<Vec<D>>& still, const RigidLimbOptions& opts)
+{
+    checkSurface(unitSource, "source");
+    checkSurface(unitTarget, "target");
+    if (sourceTips.size() != targetTips.size()) {
+        OPENVDB_THROW(openvdb::ValueError, "findRigidLimbs: " << sourceTips.size()
+                                                              << " source tips against "
+                                                              << targetTips.size());
+    }
+    checkPoints(sourceTips, "the source tips");
+    checkPoints(targetTips, "the target tips");
+    checkPoints(still, "the still points");
+    const bool ok = opts.minMotion >= 0 && std::isfinite(opts.minMotion) && opts.reach > 0 &&
+                    opts.reach <= 1 && opts.targetReach >= opts.reach && opts.targetReach <= 1 &&
+                    opts.trim > 0 && opts.trim <= 1 && opts.iterations >= 1 &&
+                    opts.maxResidual >= 0 && std::isfinite(opts.maxResidual) && opts.count >= 2;
+    if (!ok) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "findRigidLimbs: options out of range (minMotion >= 0, 0 < reach <= "
+                      "targetReach <= 1, 0 < trim <= 1, iterations >= 1, maxResidual >= 0, "
+                      "count >= 2)");
+    }
+    RigidLimbs<D> out;
+    if (still.empty()) return out;
+    const std::vector<double> w1 = vertexShares(unitSource), w2 = vertexShares(unitTarget);
+    std::vector<std::size_t> still1, still2;
+    for (const Vec<D>& p : still) {
+        still1.push_back(nearestVertex(unitSource, p));
+        still2.push_back(nearestVertex(unitTarget, p));
+    }
+    for (std::size_t k = 0; k < sourceTips.size(); ++k) {
+        if (!((sourceTips[k] - targetTips[k]).norm() > opts.minMotion)) continue;
+        RigidLimb<D> limb;
+        limb.extremity = k;
+        std::vector<double> g1, g2;
+        detail::invokeBoth(
+            opts.threaded,
+            [&] { g1 = edgeDistance(unitSource, nearestVertex(unitSource, sourceTips[k])); },
+            [&] { g2 = edgeDistance(unitTarget, nearestVertex(unitTarget, targetTips[k])); });
+        double j1 = FAR, j2 = FAR;
+        for (std::size_t i : still1)
+            j1 = std::min(j1, g1[i]);
+        for (std::size_t i : still2)
+            j2 = std::min(j2, g2[i]);
+        limb.joint = std::min(j1, j2);
+        limb.sourceJoint = j1;
+        limb.targetJoint = j2;
+        if (!std::isfinite(limb.joint)) {
+            limb.reason = "no still point is connected to the tip";
+            out.limbs.push_back(limb);
+            continue;
+        }
+
+        const double reach = opts.reach * limb.joint, targetReach = opts.targetReach * limb.joint;
+        std::vector<std::size_t> r1, r2, fit2;
+        for (std::size_t i = 0; i < g1.size(); ++i)
+            if (g1[i] < reach) r1.push_back(i);
+        for (std::size_t i = 0; i < g2.size(); ++i) {
+            if (g2[i] < reach) r2.push_back(i);
+            if (g2[i] < targetReach) fit2.push_back(i);
+        }
+        limb.sourceVertices = r1.size();
+        limb.targetVertices = r2.size();
+        if (r1.size() < opts.minVertices || r2.size() < opts.minVertices) {
+            std::ostringstream s;
+            s << "the limb has too few vertices (" << r1.size() << " and " << r2.size() << ")";
+            limb.reason = s.str();
+            out.limbs.push_back(limb);
+            continue;
+        }
+        Vec<D> c1, u1, c2, u2;
+        principalAxis(unitSource, w1, r1, sourceTips[k], c1, u1);
+        principalAxis(unitTarget, w2, r2, targetTips[k], c2, u2);
+        // Trimmed closest points from the least rotation between the axes.
+        Mat<D> R = leastRotation<D>(u1, u2);
+        Vec<D> t = c2 - R * c1;
+        std::vector<std::size_t> nearest(r1.size());
+        std::vector<double> dist(r1.size());
+        double residual = FAR;
+        for (int it = 0; it < opts.iterations; ++it) {
+            detail::forEachIndex(r1.size(), opts.threaded, [&](std::size_t a) {
+                const Vec<D> y = R * unitSource.points[r1[a]] + t;
+                double best = FAR;
+                std::size_t bi = 0;
+                for (std::size_t j : fit2) {
+                    const double d = (unitTarget.points[j] - y).squaredNorm();
+                    if (d < best) {
+                        best = d;
+                        bi = j;
+                    }
+                }
+                nearest[a] = bi;
+                dist[a] = std::sqrt(best);
+            });
+            std::vector<double> sorted = dist;
+            const std::size_t cut =
+                std::min(sorted.size() - 1, std::size_t(opts.trim * double(sorted.size())));
+            std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(cut), sorted.end());
+            const double limit = sorted[cut];
+            double total = 0, sum = 0;
+            Vec<D> mx = Vec<D>::Zero(), my = Vec<D>::Zero();
+            for (std::size_t a = 0; a < r1.size(); ++a) {
+                if (dist[a] > limit) continue;
+                const double wa = w1[r1[a]];
+                total += wa;
+                sum += wa * dist[a];
+                mx += wa * unitSource.points[r1[a]];
+                my += wa * unitTarget.points[nearest[a]];
+            }
+            residual = sum / total;
+            mx /= total;
+            my /= total;
+            Mat<D> H = Mat<D>::Zero();
+            for (std::size_t a = 0; a < r1.size(); ++a) {
+                if (dist[a] > limit) continue;
+                H += w1[r1[a]] * (unitSource.points[r1[a]] - mx) *
+                     (unitTarget.points[nearest[a]] - my).transpose();
+            }
+            Eigen::JacobiSVD<Mat<D>> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+            Mat<D> fix = Mat<D>::Identity();
+            fix(D - 1, D - 1) =
+                (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+            R = svd.matrixV() * fix * svd.matrixU().transpose();
+            t = my - R * mx;
+        }
+        limb.residual = residual;
+        Mat<D> rotation = R;
+        if constexpr (D == 3) {
+            rotation = leastRotation<D>(u1, (R * u1).normalized());
+            limb.axialTurn = rotationAngle<D>(R * rotation.transpose());
+        }
+        limb.rotation = rotation;
+        limb.sourceCentre = c1;
+        limb.targetCentre = R * c1 + t;
+        limb.angle = rotationAngle<D>(rotation);
+        if (!(residual <= opts.maxResidual)) {
+            std::ostringstream s;
+            s << "not rigid: the fit leaves " << residual << " > " << opts.maxResidual
+              << " (unit box)";
+            limb.reason = s.str();
+            out.limbs.push_back(limb);
+            continue;
+        }
+        limb.used = true;
+        const std::size_t half = opts.count / 2;
+        for (std::size_t i : farthestSamples(unitSource, r1, sourceTips[k], opts.count - half)) {
+            out.source.push_back(unitSource.points[i]);
+            out.target.push_back(limb.map(unitSource.points[i]));
+        }
+        for (std::size_t i : farthestSamples(unitTarget, r2, targetTips[k], half)) {
+            const Vec<D> p = limb.inverse(unitTarget.points[i]);
+            if (!((p.array() > 0).all() && (p.array() < 1).all())) continue; // off Omega
+            out.source.push_back(p);
+            out.target.push_back(unitTarget.points[i]);
+        }
+        out.limbs.push_back(limb);
+    }
+    return out;
+}
+
+template RigidLimbs<2> findRigidLimbs<2>(const Surface<2>&, const Surface<2>&,
+                                         const std::vector<Vec<2>>&, const std::vector<Vec<2>>&,
+                                         const std::vector<Vec<2>>&, const RigidLimbOptions&);
+template RigidLimbs<3> findRigidLimbs<3>(const Surface<3>&, const Surface<3>&,
+                                         const std::vector<Vec<3>>&, const std::vector<Vec<3>>&,
+                                         const std::vector<Vec<3>>&, const RigidLimbOptions&);
+
+} // namespace vdbmatch

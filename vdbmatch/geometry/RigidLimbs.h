@@ -1,0 +1,111 @@
+/// @file RigidLimbs.h
+/// @brief The moving limbs of an articulation, each carried from M1 to M2 by one rigid motion
+///        without a turn about its own axis: points of the limb and their images, for the
+///        automatic limb landmarks (an addition to the paper, whose energy has no landmarks;
+///        docs/numerics.md "Rigid limbs").
+///
+/// A round limb looks the same turned about its own axis, so neither d1, d2 nor the stored
+/// energies see such a turn, and the coarse levels set it by chance (docs/results.md, "The
+/// swung leg turns about its own axis"). The prior here is that a limb swung at a joint moves
+/// rigidly, by the least rotation that takes its axis in M1 to its axis in M2 (right for a hinge
+/// and for a ball joint that swings; wrong for a forearm's pronation, which no shape term can
+/// tell either). For each pair of paired extremities (a in M1, b in M2, Extremities.h) that
+/// moved farther than minMotion:
+/// 1. g1, g2: the geodesic distance along the edges of each surface from its vertex nearest to
+///    a (resp. b), by Dijkstra;
+/// 2. the joint is where the limb meets what stayed: J1, J2 = the least g1, g2 over the still
+///    points (the automatic anchors, StillAnchors.h, each taken at its nearest vertex on each
+///    shape), and J the smaller (J1 and J2 need not agree: where the shapes coincide changes
+///    with the pose, 0.147 and 0.192 on the benchmark's swung leg); the limb is the vertices with g
+///    < reach * J, away from the joint, where an articulation bends the skin;
+/// 3. the rigid motion (R, t) that best carries M1's limb onto M2's (the vertices of M2 with
+///    g2 < targetReach * J), by trimmed iterative closest points (point to point, weighted by
+///    the vertices' shares of the measure, the worst (1 - trim) of the pairs left out), from the
+///    least rotation between the limbs' principal axes; it must fit: the weighted mean distance
+///    of the kept pairs at most maxResidual, or the limb is not rigid and is left out;
+/// 4. in 3D, R without its turn about the limb's axis u (M1's principal axis): the least
+///    rotation taking u to R u (in 2D there is no such turn: R itself); the centroid c of M1's
+///    limb goes where (R, t) takes it;
+/// 5. count / 2 farthest-point samples of each limb, from its vertex nearest the tip: the
+///    samples p of M1 paired with their images, those q of M2 with their preimages, so that the
+///    match M2 -> M1 holds nearly the same pairs (its fit is made the other way round).
+/// Limits: a limb stretched or shortened along itself still fits (a cylinder slides along
+/// itself), and its points are then held where the rigid motion takes them; a limb bent at a
+/// second joint (a knee) does not fit and is left out, as a whole.
+/// The result does not depend on the thread count.
+#pragma once
+
+#include <vdbmatch/Types.h>
+#include <vdbmatch/geometry/Surface.h>
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace vdbmatch {
+
+/// Options of findRigidLimbs(); lengths in Omega units.
+struct RigidLimbOptions
+{
+    double minMotion = 0.03;    ///< an extremity moved when |a - b| exceeds this
+    double reach = 0.6;         ///< the limb: g < reach * J (0 < reach <= 1)
+    double targetReach = 0.8;   ///< the fit's target on M2: g2 < targetReach * J (>= reach)
+    double trim = 0.9;          ///< share of the closest pairs the fit keeps (0 < trim <= 1)
+    int iterations = 30;        ///< closest-point iterations, >= 1
+    double maxResidual = 0.003; ///< the limb is rigid when the fit's mean distance is at most this
+
+    std::size_t count = 20;       ///< samples per limb, both shapes together (>= 2)
+    std::size_t minVertices = 20; ///< fewer vertices on either limb: left out
+    bool threaded = true;         ///< the closest points use TBB (the result does not depend on it)
+};
+
+/// One moving limb and what became of it.
+template <int D> struct RigidLimb
+{
+    std::size_t extremity = 0;               ///< index of the pair in the caller's list
+    bool used = false;                       ///< its samples are in RigidLimbs::source/target
+    std::string reason;                      ///< why not, when !used
+    double joint = 0;                        ///< J = min(J1, J2), Omega units
+    double sourceJoint = 0, targetJoint = 0; ///< J1, J2
+    std::size_t sourceVertices = 0, targetVertices = 0; ///< the limbs' vertices (g < reach J)
+    double residual = 0;  ///< the fit's weighted mean distance of the kept pairs
+    double angle = 0;     ///< the rotation's angle, degrees (after the axial turn is removed)
+    double axialTurn = 0; ///< the turn about the axis the fit had and was removed, degrees
+    Mat<D> rotation = Mat<D>::Identity();
+    Vec<D> sourceCentre = Vec<D>::Zero(), targetCentre = Vec<D>::Zero(); ///< c and its image
+    /// The map of the limb: x -> rotation (x - sourceCentre) + targetCentre.
+    Vec<D> map(const Vec<D>& x) const { return rotation * (x - sourceCentre) + targetCentre; }
+    Vec<D> inverse(const Vec<D>& y) const
+    {
+        return rotation.transpose() * (y - targetCentre) + sourceCentre;
+    }
+};
+
+/// The rigid limbs of one pair of shapes.
+template <int D> struct RigidLimbs
+{
+    std::vector<RigidLimb<D>> limbs; ///< one per extremity pair that moved
+    /// The samples of the used limbs: source[k] (inside or near M1) goes to target[k].
+    std::vector<Vec<D>> source, target;
+};
+
+/// The moving limbs of @a unitSource and @a unitTarget (Omega units) that an articulation
+/// carried rigidly (see the file comment). @a sourceTips and @a targetTips are the paired
+/// extremities (row k of each), @a still the points where the shapes coincide (the anchors).
+/// No still point: no limb (the joint cannot be told).
+/// @throw openvdb::ValueError if a surface fails checkSurface(), the tip lists differ in size, a
+///        point is not finite, or an option is out of its range
+template <int D>
+RigidLimbs<D>
+findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
+               const std::vector<Vec<D>>& sourceTips, const std::vector<Vec<D>>& targetTips,
+               const std::vector<Vec<D>>& still, const RigidLimbOptions& opts = RigidLimbOptions());
+
+extern template RigidLimbs<2>
+findRigidLimbs<2>(const Surface<2>&, const Surface<2>&, const std::vector<Vec<2>>&,
+                  const std::vector<Vec<2>>&, const std::vector<Vec<2>>&, const RigidLimbOptions&);
+extern template RigidLimbs<3>
+findRigidLimbs<3>(const Surface<3>&, const Surface<3>&, const std::vector<Vec<3>>&,
+                  const std::vector<Vec<3>>&, const std::vector<Vec<3>>&, const RigidLimbOptions&);
+
+} // namespace vdbmatch
