@@ -155,6 +155,7 @@ MatchOptions::defaults(int dim)
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
     opts.anchorNoiseFactor = dim == 3 ? DEFAULT_ANCHOR_NOISE_FACTOR_3D : 0.0;
     opts.rigidLimbWeight = dim == 3 ? DEFAULT_RIGID_LIMB_WEIGHT_3D : 0.0;
+    opts.rigidLimbAnchorRadius = dim == 3 ? DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D : 0.0;
     return opts;
 }
 
@@ -195,6 +196,11 @@ MatchOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MatchOptions: rigidLimbMinMotion must be finite and >= 0, got "
                           << rigidLimbMinMotion);
+    }
+    if (!(rigidLimbAnchorRadius >= 0) || !std::isfinite(rigidLimbAnchorRadius)) {
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MatchOptions: rigidLimbAnchorRadius must be finite and >= 0, got "
+                          << rigidLimbAnchorRadius);
     }
     if (!(rigidLimbOptions.count >= 2)) {
         OPENVDB_THROW(openvdb::ValueError, "MatchOptions: the rigid limbs' count must be >= 2, got "
@@ -462,6 +468,7 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         ao.tolerance = std::max(ao.tolerance, opts.anchorNoiseFactor * correlated);
         const StillAnchors<D> anchors = findStillAnchors<D>(unitSource, unitTarget, ao);
         out.anchorTolerance = ao.tolerance;
+        out.anchorRadius = ao.radius;
         out.anchorCoincidentShare = anchors.coincidentShare();
         if (anchors.points.empty()) {
             std::ostringstream s;
@@ -507,6 +514,24 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                 if (D == 2) wa[2] = wb[2] = 0;
                 out.limbSource.push_back(wa);
                 out.limbTarget.push_back(wb);
+            }
+            // A limb swung beyond the first band drags the skin next to its joint: the anchors
+            // come nearer the joints (a smaller patch), sought again.
+            const double r = opts.rigidLimbAnchorRadius;
+            if (!limbs.source.empty() && r > 0 && r < ao.radius) {
+                StillAnchorOptions near = ao;
+                near.radius = r;
+                const StillAnchors<D> closer = findStillAnchors<D>(unitSource, unitTarget, near);
+                if (!closer.points.empty()) {
+                    out.anchorRadius = r;
+                    out.anchorCoincidentShare = closer.coincidentShare();
+                    out.anchors.clear();
+                    for (const Vec<D>& p : closer.points) {
+                        openvdb::Vec3d w = world(p);
+                        if (D == 2) w[2] = 0;
+                        out.anchors.push_back(w);
+                    }
+                }
             }
         }
         out.seconds = secondsSince(start);

@@ -107,6 +107,9 @@ constexpr double ANCHOR_STILL_RATIO = 0.5;
 /// 3D: 20 points of one limb weigh 500 each, five times an anchor (docs/numerics.md "Rigid
 /// limbs"). 2D: off (a planar limb has no turn about its own axis to fix).
 constexpr double DEFAULT_RIGID_LIMB_WEIGHT_3D = 1e4;
+/// Default MatchOptions::rigidLimbAnchorRadius in 3D: half the anchors' radius when a rigid limb
+/// is held (docs/numerics.md "Rigid limbs").
+constexpr double DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D = 0.015;
 
 /// Default MatchOptions::anchorNoiseFactor in 3D: the anchors' tolerance is at least this times
 /// the shapes' correlated noise (correlatedNoise(), about 1.6 times its standard deviation), so
@@ -305,6 +308,12 @@ struct MatchOptions
     /// (>= 0): a limb nearer than the first band is found by the match term from the start; one
     /// beyond it is carried far by the coarse levels, which is where a round limb turns.
     double rigidLimbMinMotion = 1;
+    /// When a rigid limb is held, the anchors are sought again with this patch radius (Omega
+    /// units), if smaller than anchorOptions.radius: a limb swung beyond the first band drags
+    /// the skin next to its joint, and smaller patches put anchors nearer the joint. >= 0; 0:
+    /// the anchors keep their radius (paper(), defaults(2)); defaults(3):
+    /// DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D.
+    double rigidLimbAnchorRadius = 0;
     RigidLimbOptions rigidLimbOptions; ///< reach, fit and count (Omega units; minMotion is set
                                        ///< from rigidLimbMinMotion)
     /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):
@@ -458,6 +467,9 @@ struct AutoLandmarkSummary
     };
     std::vector<Limb> limbs;
     double limbMinMotion = 0; ///< the threshold, rigidLimbMinMotion sigma of the first level
+    /// The anchors' patch radius (StillAnchorOptions::radius, Omega units): the option's, or
+    /// MatchOptions::rigidLimbAnchorRadius when a rigid limb is held; 0 when not sought.
+    double anchorRadius = 0;
     std::vector<openvdb::Vec3d> limbSource, limbTarget;
     double seconds = 0;
 };

@@ -87,6 +87,7 @@ def match(
     anchor_noise_tolerance: float | None = None,
     rigid_limb_weight: float | None = None,
     rigid_limb_min_motion: float | None = None,
+    rigid_limb_anchor_radius: float | None = None,
     rigid_limb_count: int | None = None,
     rigid_limb_reach: float | None = None,
     inner_distance_weight: float | None = None,

@@ -214,3 +214,44 @@ TEST(RigidLimbs, ThreadCountDoesNotChangeTheResult)
         EXPECT_EQ(a.target[k], b.target[k]);
     }
 }
+
+TEST(RigidLimbs, SwungStadiumIn2D)
+{
+    // The 2D outline of the capsule's section (a stadium) swung by 60 degrees about its base.
+    Surface<2> a;
+    const Vec<2> base(0.3, 0.3);
+    const int n = 40;
+    for (int i = 0; i < n; ++i) { // right side up, top cap, left side down, bottom cap
+        const double t = double(i) / n;
+        a.points.push_back(base + Vec<2>(RADIUS, RADIUS + LENGTH * t));
+    }
+    for (int i = 0; i < n / 2; ++i) {
+        const double t = M_PI * i / (n / 2);
+        a.points.push_back(base +
+                           Vec<2>(RADIUS * std::cos(t), RADIUS + LENGTH + RADIUS * std::sin(t)));
+    }
+    for (int i = 0; i < n; ++i) {
+        const double t = double(i) / n;
+        a.points.push_back(base + Vec<2>(-RADIUS, RADIUS + LENGTH * (1 - t)));
+    }
+    for (int i = 0; i < n / 2; ++i) {
+        const double t = M_PI + M_PI * i / (n / 2);
+        a.points.push_back(base + Vec<2>(RADIUS * std::cos(t), RADIUS + RADIUS * std::sin(t)));
+    }
+    const int m = int(a.points.size());
+    for (int i = 0; i < m; ++i)
+        a.elements.push_back({i, (i + 1) % m});
+    const double angle = -60 * M_PI / 180;
+    Mat<2> R;
+    R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
+    Surface<2> b = a;
+    for (Vec<2>& p : b.points)
+        p = R * (p - base) + base;
+    const Vec<2> tip = base + Vec<2>(0, LENGTH + 2 * RADIUS);
+    const RigidLimbs<2> limbs = findRigidLimbs<2>(a, b, {tip}, {R * (tip - base) + base}, {base});
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    ASSERT_TRUE(limbs.limbs[0].used) << limbs.limbs[0].reason;
+    EXPECT_NEAR(limbs.limbs[0].angle, 60.0, 0.5);
+    for (std::size_t k = 0; k < limbs.source.size(); ++k)
+        EXPECT_LT((limbs.target[k] - (R * (limbs.source[k] - base) + base)).norm(), 2e-3) << k;
+}

@@ -70,6 +70,7 @@ configKeys()
         {"anchorNoiseTolerance", "--anchor-noise-tolerance"},
         {"rigidLimbWeight", "--rigid-limb-weight"},
         {"rigidLimbMinMotion", "--rigid-limb-min-motion"},
+        {"rigidLimbAnchorRadius", "--rigid-limb-anchor-radius"},
         {"rigidLimbCount", "--rigid-limb-count"},
         {"rigidLimbReach", "--rigid-limb-reach"},
         {"innerDistanceWeight", "--inner-distance-weight"},

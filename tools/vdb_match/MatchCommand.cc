@@ -118,7 +118,8 @@ struct MatchCliOptions
     std::optional<double> innerDistanceWeight;  ///< --inner-distance-weight (default per dimension)
     std::optional<double> rigidLimbWeight;      ///< --rigid-limb-weight (default per dimension)
     double rigidLimbMinMotion = MatchOptions().rigidLimbMinMotion; ///< --rigid-limb-min-motion
-    RigidLimbOptions rigidLimbOptions; ///< --rigid-limb-count, --rigid-limb-reach
+    std::optional<double> rigidLimbAnchorRadius; ///< --rigid-limb-anchor-radius (per dimension)
+    RigidLimbOptions rigidLimbOptions;           ///< --rigid-limb-count, --rigid-limb-reach
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
@@ -159,7 +160,9 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
                          : ": not held: " + l.reason);
     }
     if (!a.limbSource.empty())
-        limbs += ", " + std::to_string(a.limbSource.size()) + " limb points at every level";
+        limbs += ", " + std::to_string(a.limbSource.size()) +
+                 " limb points at every level (anchors' radius " + fixed("%.3g", a.anchorRadius) +
+                 ")";
     const std::string rest = anchors + limbs;
     if (!a.used) return "automatic landmarks: not used: " + a.reason + rest;
     return "automatic landmarks: " + std::to_string(a.source.size()) +
@@ -639,6 +642,14 @@ matchOptionTable()
              formatNumber(d.rigidLimbMinMotion) + ")",
          [](O& o, const std::string& v) {
              o.rigidLimbMinMotion = parseDouble("--rigid-limb-min-motion", v);
+         }},
+        {"--rigid-limb-anchor-radius", "X", "Landmarks (an addition to the paper)",
+         "when a rigid limb is held, the anchors are sought again with this --anchor-radius, if "
+         "smaller, so that they come nearer the joints, >= 0; 0: the anchors keep theirs "
+         "(default " +
+             both(DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D, 0.0) + "; --preset paper: 0)",
+         [](O& o, const std::string& v) {
+             o.rigidLimbAnchorRadius = parseDouble("--rigid-limb-anchor-radius", v);
          }},
         {"--rigid-limb-count", "N", "Landmarks (an addition to the paper)",
          "points per rigid limb, half on each shape, >= 2 (default " +
@@ -1187,6 +1198,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"anchorNoiseTolerance", opts.anchorNoiseFactor},
              {"rigidLimbWeight", opts.rigidLimbWeight},
              {"rigidLimbMinMotion", opts.rigidLimbMinMotion},
+             {"rigidLimbAnchorRadius", opts.rigidLimbAnchorRadius},
              {"rigidLimbCount", opts.rigidLimbOptions.count},
              {"rigidLimbReach", opts.rigidLimbOptions.reach},
              {"innerDistanceWeight", opts.innerDistanceWeight},
@@ -1220,6 +1232,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                  {"anchorCoincidentShare", a.anchorCoincidentShare},
                  {"anchorReason", a.anchorReason.empty() ? Json() : Json(a.anchorReason)},
                  {"anchorTolerance", a.anchorTolerance},
+                 {"anchorRadius", a.anchorRadius},
                  {"seconds", a.seconds}};
         if (!a.limbs.empty()) {
             Json limbs = Json::array();
@@ -1443,6 +1456,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.rigidLimbWeight) opts.rigidLimbWeight = *o.rigidLimbWeight;
     opts.rigidLimbOptions = o.rigidLimbOptions;
     opts.rigidLimbMinMotion = o.rigidLimbMinMotion;
+    if (o.rigidLimbAnchorRadius) opts.rigidLimbAnchorRadius = *o.rigidLimbAnchorRadius;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;
     opts.innerDistanceRatio = o.innerDistanceRatio;
     opts.innerDistanceLevel = o.innerDistanceLevel;
