@@ -1,0 +1,78 @@
+"""Rigid limbs (docs/numerics.md "Rigid limbs") on the benchmark's swung leg
+(bench/accuracy/make_pairs.py animal_leg_swing: the front right leg swung 90 degrees forward at
+the shoulder), levels 4..6 (a few seconds each):
+- the leg is found rigid, with about g's 90 degrees, and its 20 points are held at every level;
+  the anchors are sought again with the smaller radius;
+- the leg no longer turns about its own axis on the way (bench/accuracy/limb_twist.py: every
+  slab's median turn within 15 degrees, against 20-30 with --rigid-limb-weight 0, the default
+  before 2026-12-02), and the error over all vertices falls by more than a fifth."""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ACCURACY = os.path.join(HERE, "..", "..", "bench", "accuracy")
+MAKE_PAIRS = os.path.join(ACCURACY, "make_pairs.py")
+sys.path.insert(0, ACCURACY)
+from score import read_points  # noqa: E402  (bench/accuracy/score.py)
+from limb_twist import twist_table  # noqa: E402  (bench/accuracy/limb_twist.py)
+
+PAIR = "animal_leg_swing"
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    vdb_match = os.environ.get("VDB_MATCH")
+    if not vdb_match:
+        pytest.fail("VDB_MATCH (the vdb_match executable) is not set")
+    root = tmp_path_factory.mktemp("limbs")
+    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", PAIR], check=True,
+                   stdout=subprocess.DEVNULL)
+    pair = root / "pairs" / PAIR
+    out = {}
+    for label, extra in {"on": [], "off": ["--rigid-limb-weight", "0"]}.items():
+        run = root / label
+        subprocess.run([vdb_match, "match", str(pair / "source.obj"),
+                        str(pair / "target_resampled.obj"), "-o", str(run), "--levels", "4..6",
+                        "--threads", "2", "--quiet"] + extra, check=True)
+        out[label] = run
+    return pair, out
+
+
+def measured(pair, run):
+    """(mean |phi(v) - g(v)| over the source's vertices, the leg's slabs' median turns)."""
+    v, g, phi = (read_points(str(p), 3) for p in
+                 (pair / "source.obj", pair / "truth.xyz", run / "deformed.obj"))
+    assert len(v) == len(g) == len(phi)
+    turns = [row[2] for row in twist_table(v, g, phi, 0.3, 4)]
+    return float(np.linalg.norm(phi - g, axis=1).mean()), turns
+
+
+def test_the_leg_is_held_rigid(runs):
+    _, run = runs
+    on = json.load(open(run["on"] / "report.json"))
+    off = json.load(open(run["off"] / "report.json"))
+    limbs = on["autoLandmarks"]["rigidLimbs"]
+    used = [l for l in limbs if l["used"]]
+    assert len(used) == 1, limbs
+    assert 80 < used[0]["angleDegrees"] < 100, used[0]
+    assert used[0]["residual"] < 0.003, used[0]
+    assert on["autoLandmarks"]["rigidLimbPoints"] == 20
+    assert on["autoLandmarks"]["anchorRadius"] == 0.015
+    assert on["parameters"]["rigidLimbWeight"] == 1e4
+    assert "rigidLimbs" not in off["autoLandmarks"], off["autoLandmarks"].keys()
+    assert off["autoLandmarks"]["anchorRadius"] == 0.03
+
+
+def test_the_leg_does_not_turn_about_its_axis(runs):
+    pair, run = runs
+    err_on, turns_on = measured(pair, run["on"])
+    err_off, turns_off = measured(pair, run["off"])
+    assert max(abs(t) for t in turns_on) < 15, turns_on
+    assert min(abs(t) for t in turns_off) > 20, turns_off
+    assert err_on < 0.8 * err_off, (err_on, err_off)
