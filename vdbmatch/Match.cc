@@ -475,11 +475,15 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             s << "the shapes coincide nowhere (within " << ao.tolerance << ", unit box)";
             out.anchorReason = s.str();
         }
-        for (const Vec<D>& p : anchors.points) {
-            openvdb::Vec3d w = world(p);
-            if (D == 2) w[2] = 0;
-            out.anchors.push_back(w);
-        }
+        const auto setAnchors = [&](const std::vector<Vec<D>>& points) {
+            out.anchors.clear();
+            for (const Vec<D>& p : points) {
+                openvdb::Vec3d w = world(p);
+                if (D == 2) w[2] = 0;
+                out.anchors.push_back(w);
+            }
+        };
+        setAnchors(anchors.points);
         // Rigid limbs: the moving extremities' limbs, from the anchors' joint.
         if (opts.rigidLimbWeight > 0 && !anchors.points.empty()) {
             std::vector<Vec<D>> tipsA, tipsB;
@@ -525,12 +529,7 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                 if (!closer.points.empty()) {
                     out.anchorRadius = r;
                     out.anchorCoincidentShare = closer.coincidentShare();
-                    out.anchors.clear();
-                    for (const Vec<D>& p : closer.points) {
-                        openvdb::Vec3d w = world(p);
-                        if (D == 2) w[2] = 0;
-                        out.anchors.push_back(w);
-                    }
+                    setAnchors(closer.points);
                 }
             }
         }
