@@ -628,7 +628,8 @@ matchOptionTable()
          }},
         {"--rigid-limb-weight", "X", "Landmarks (an addition to the paper)",
          "c_rl, the total weight of the rigid limbs' points, >= 0: when the automatic anchors "
-         "act, each limb whose extremity moved and that one rigid motion carries from M1 to M2 "
+         "act, each limb whose extremity moved farther than --rigid-limb-min-motion and that one "
+         "rigid motion carries from M1 to M2 "
          "(fitted by closest points, without a turn about its own axis) has --rigid-limb-count "
          "points held at their images at every level, so that a round limb does not turn about "
          "its axis (docs/numerics.md \"Rigid limbs\"); 0: off (default " +
