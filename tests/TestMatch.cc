@@ -827,15 +827,15 @@ TEST(Match, AnchorsOnlyForAnArticulation)
     }
 }
 
-TEST(Match, RigidLimbsHoldTheTurnedArm)
+TEST(Match, RigidLimbsRefuseANonRigidArm)
 {
     // The rigid limbs (geometry/RigidLimbs.h) act with the anchors: on by default in 3D only
     // (a planar limb has no turn about its own axis), off in the paper's preset. Here, in 2D,
-    // turned on: the star's arm turned by 30 degrees about the centre is the one moving limb
-    // that the fit accepts (its waists turn by half as much, so it is not quite rigid: the fit's
-    // tolerance is opened here, the fit itself is tested in geometry/TestRigidLimbs.cc); its
-    // points act at every level and the anchors are sought again with the smaller radius. What
-    // they do for the error is measured on the benchmark (docs/numerics.md "Rigid limbs").
+    // turned on: the star's arm turned by 30 degrees about the centre is the moving limb, but
+    // its waists turn by half as much, so it is not rigid: match() reports it with the fit's
+    // distance, holds no point, keeps the anchors' radius, and runs as without the limbs. The
+    // fit on rigid limbs is tested in geometry/TestRigidLimbs.cc; a held limb in a whole match
+    // (points, nearer anchors, effect on the error) in tests/bench/test_rigid_limbs.py.
     EXPECT_EQ(MatchOptions::defaults(3).rigidLimbWeight, DEFAULT_RIGID_LIMB_WEIGHT_3D);
     EXPECT_EQ(MatchOptions::defaults(3).rigidLimbAnchorRadius, DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D);
     EXPECT_EQ(MatchOptions::defaults(2).rigidLimbWeight, 0.0);
@@ -847,36 +847,29 @@ TEST(Match, RigidLimbsHoldTheTurnedArm)
     opts.multiscale.minLevel = 4;
     opts.multiscale.maxLevel = 5;
     opts.rigidLimbWeight = 1e3;
-    opts.rigidLimbMinMotion = 0;
     opts.rigidLimbAnchorRadius = 0.015;
-    opts.rigidLimbOptions.maxResidual = 1;
     const UnitBoxPlacement placement = placeInUnitBox(a, b, opts.margin);
     const MatchResult<2> with = match<2>(a, b, placement, opts);
     ASSERT_TRUE(with.isComplete());
     const AutoLandmarkSummary& s = with.autoLandmarks;
     ASSERT_FALSE(s.anchors.empty()) << s.anchorReason;
-    std::size_t used = 0;
-    for (const AutoLandmarkSummary::Limb& l : s.limbs) {
-        if (!l.used) continue;
-        ++used;
-        EXPECT_GT(l.angle, 10.0);
-        EXPECT_LT(l.angle, 60.0);
-        EXPECT_GT(l.sourceVertices, 0u);
-        // The turned arm's tip is its extremity.
-        const openvdb::Vec3d tip = s.source[l.extremity];
-        EXPECT_NEAR(std::atan2(tip[1], tip[0]), rest[0], 0.2);
-    }
-    EXPECT_EQ(used, 1u);
-    EXPECT_EQ(s.limbSource.size(), opts.rigidLimbOptions.count);
-    EXPECT_EQ(s.limbTarget.size(), s.limbSource.size());
-    EXPECT_EQ(s.anchorRadius, 0.015);
+    ASSERT_EQ(s.limbs.size(), 1u); // only the turned arm moved farther than sigma of level 4
+    const RigidLimbFit& l = s.limbs[0];
+    const openvdb::Vec3d tip = s.source[l.extremity];
+    EXPECT_NEAR(std::atan2(tip[1], tip[0]), rest[0], 0.2);
+    EXPECT_FALSE(l.used);
+    EXPECT_NE(l.reason.find("not rigid"), std::string::npos) << l.reason;
+    EXPECT_GT(l.residual, opts.rigidLimbOptions.maxResidual);
+    EXPECT_GT(l.sourceVertices, 0u);
+    EXPECT_TRUE(s.limbSource.empty());
+    EXPECT_EQ(s.anchorRadius, opts.anchorOptions.radius);
     MatchOptions off = opts;
     off.rigidLimbWeight = 0;
     const MatchResult<2> without = match<2>(a, b, placement, off);
     ASSERT_TRUE(without.isComplete());
     EXPECT_TRUE(without.autoLandmarks.limbs.empty());
-    EXPECT_TRUE(without.autoLandmarks.limbSource.empty());
-    EXPECT_EQ(without.autoLandmarks.anchorRadius, opts.anchorOptions.radius);
+    ASSERT_EQ(with.displacement.cols(), without.displacement.cols());
+    EXPECT_TRUE(with.displacement == without.displacement); // bitwise
     MatchOptions bad = opts;
     bad.rigidLimbWeight = -1;
     EXPECT_THROW(bad.validate(2), openvdb::ValueError);

@@ -498,21 +498,8 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             out.limbMinMotion = lo.minMotion;
             const RigidLimbs<D> limbs =
                 findRigidLimbs<D>(unitSource, unitTarget, tipsA, tipsB, anchors.points, lo);
-            for (const RigidLimb<D>& l : limbs.limbs) {
-                AutoLandmarkSummary::Limb s;
-                s.extremity = l.extremity;
-                s.used = l.used;
-                s.reason = l.reason;
-                s.joint = l.joint;
-                s.sourceJoint = l.sourceJoint;
-                s.targetJoint = l.targetJoint;
-                s.residual = l.residual;
-                s.angle = l.angle;
-                s.axialTurn = l.axialTurn;
-                s.sourceVertices = l.sourceVertices;
-                s.targetVertices = l.targetVertices;
-                out.limbs.push_back(s);
-            }
+            for (const RigidLimb<D>& l : limbs.limbs)
+                out.limbs.push_back(l); // the fit, without the map
             for (std::size_t k = 0; k < limbs.source.size(); ++k) {
                 openvdb::Vec3d wa = world(limbs.source[k]), wb = world(limbs.target[k]);
                 if (D == 2) wa[2] = wb[2] = 0;

@@ -457,15 +457,8 @@ struct AutoLandmarkSummary
     /// Rigid limbs (MatchOptions::rigidLimbWeight > 0, with the anchors): what the fit found of
     /// each moving limb (Omega units, degrees), and the points held at every level with their
     /// images, world units (2D: z = 0).
-    struct Limb
-    {
-        std::size_t extremity = 0; ///< row of source/target
-        bool used = false;
-        std::string reason;
-        double joint = 0, sourceJoint = 0, targetJoint = 0, residual = 0, angle = 0, axialTurn = 0;
-        std::size_t sourceVertices = 0, targetVertices = 0;
-    };
-    std::vector<Limb> limbs;
+    /// RigidLimbFit::extremity is the row of source/target.
+    std::vector<RigidLimbFit> limbs;
     double limbMinMotion = 0; ///< the threshold, rigidLimbMinMotion sigma of the first level
     /// The anchors' patch radius (StillAnchorOptions::radius, Omega units): the option's, or
     /// MatchOptions::rigidLimbAnchorRadius when a rigid limb is held; 0 when not sought.

@@ -153,7 +153,7 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
                        : std::string()) +
                   ")";
     std::string limbs;
-    for (const AutoLandmarkSummary::Limb& l : a.limbs) {
+    for (const RigidLimbFit& l : a.limbs) {
         limbs += "; limb " + std::to_string(l.extremity + 1) +
                  (l.used ? ": rigid, turned " + fixed("%.0f", l.angle) + " deg (fit " +
                                fixed("%.2e", l.residual) + ")"
@@ -1237,11 +1237,11 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
                  {"seconds", a.seconds}};
         if (!a.limbs.empty()) {
             Json limbs = Json::array();
-            for (const AutoLandmarkSummary::Limb& l : a.limbs) {
+            for (const RigidLimbFit& l : a.limbs) {
                 limbs.push_back(Json{{"extremity", l.extremity},
                                      {"used", l.used},
                                      {"reason", l.used ? Json() : Json(l.reason)},
-                                     {"joint", l.joint},
+                                     {"joint", l.joint()},
                                      {"sourceJoint", l.sourceJoint},
                                      {"targetJoint", l.targetJoint},
                                      {"sourceVertices", l.sourceVertices},

@@ -252,16 +252,16 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             j1 = std::min(j1, g1[i]);
         for (std::size_t i : still2)
             j2 = std::min(j2, g2[i]);
-        limb.joint = std::min(j1, j2);
         limb.sourceJoint = j1;
         limb.targetJoint = j2;
-        if (!std::isfinite(limb.joint)) {
+        if (!std::isfinite(limb.joint())) {
             limb.reason = "no still point is connected to the tip";
             out.limbs.push_back(limb);
             continue;
         }
 
-        const double reach = opts.reach * limb.joint, targetReach = opts.targetReach * limb.joint;
+        const double reach = opts.reach * limb.joint(),
+                     targetReach = opts.targetReach * limb.joint();
         std::vector<std::size_t> r1, r2, fit2;
         for (std::size_t i = 0; i < g1.size(); ++i)
             if (g1[i] < reach) r1.push_back(i);

@@ -31,13 +31,16 @@
 ///    match M2 -> M1 holds nearly the same pairs (its fit is made the other way round).
 /// Limits: a limb stretched or shortened along itself still fits (a cylinder slides along
 /// itself), and its points are then held where the rigid motion takes them; a limb bent at a
-/// second joint (a knee) does not fit and is left out, as a whole.
+/// second joint (a knee) does not fit and is left out, as a whole; the fit starts without a turn
+/// about the axis and finds a small one on a flat limb (10 degrees in the tests), but a flat
+/// limb turned by 20 degrees or more stays out of its reach and is left out as not rigid.
 /// The result does not depend on the thread count.
 #pragma once
 
 #include <vdbmatch/Types.h>
 #include <vdbmatch/geometry/Surface.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -59,18 +62,23 @@ struct RigidLimbOptions
     bool threaded = true;         ///< the closest points use TBB (the result does not depend on it)
 };
 
-/// One moving limb and what became of it.
-template <int D> struct RigidLimb
+/// What the fit found of one moving limb (no dimension: MatchResult reports it as it is).
+struct RigidLimbFit
 {
     std::size_t extremity = 0;               ///< index of the pair in the caller's list
     bool used = false;                       ///< its samples are in RigidLimbs::source/target
     std::string reason;                      ///< why not, when !used
-    double joint = 0;                        ///< J = min(J1, J2), Omega units
-    double sourceJoint = 0, targetJoint = 0; ///< J1, J2
+    double sourceJoint = 0, targetJoint = 0; ///< J1, J2, Omega units
     std::size_t sourceVertices = 0, targetVertices = 0; ///< the limbs' vertices (g < reach J)
     double residual = 0;  ///< the fit's weighted mean distance of the kept pairs
     double angle = 0;     ///< the rotation's angle, degrees (after the axial turn is removed)
     double axialTurn = 0; ///< the turn about the axis the fit had and was removed, degrees
+    double joint() const { return std::min(sourceJoint, targetJoint); } ///< J
+};
+
+/// One moving limb: the fit and the rigid map it holds.
+template <int D> struct RigidLimb : RigidLimbFit
+{
     Mat<D> rotation = Mat<D>::Identity();
     Vec<D> sourceCentre = Vec<D>::Zero(), targetCentre = Vec<D>::Zero(); ///< c and its image
     /// The map of the limb: x -> rotation (x - sourceCentre) + targetCentre.
