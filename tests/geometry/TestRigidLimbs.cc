@@ -2,10 +2,11 @@
 /// @brief Tests of the rigid limbs of an articulation (geometry/RigidLimbs.h): a capsule swung
 /// 90 degrees about its base is found rigid, with the swing's angle, and its points go where
 /// the swing takes them, either way round (the samples of each shape at the other's
-/// preimages); a turn about the limb's own axis, which a flattened limb lets the fit see, is
-/// removed from the map and reported; a limb bent at a second joint is not rigid and is left out;
-/// tips that did not move, or no still point, give no limb; the thread count does not change the
-/// result.
+/// preimages), and the fit from M2 to M1 is the inverse of the fit from M1 to M2 on
+/// differently sampled, not quite rigid shapes; a turn about the limb's own axis, which a flattened
+/// limb lets the fit see, is removed from the map and reported; a limb bent at a second joint is
+/// not rigid and is left out; tips that did not move, or no still point, give no limb; the thread
+/// count does not change the result.
 
 #include "support/TestSurfaces.h"
 
@@ -151,6 +152,45 @@ TEST(RigidLimbs, TurnAboutTheLimbsAxisIsRemoved)
     EXPECT_NEAR(l.axialTurn, 10.0, 2.0);
     EXPECT_NEAR(l.angle, 90.0, 1.0);
     EXPECT_LT((l.rotation - s.R).norm(), 0.03);
+}
+
+TEST(RigidLimbs, EitherWayRoundTheMapsAreInverse)
+{
+    // The target sampled apart from the source (24 segments against 32) and not quite rigid
+    // (flattened to 0.96, turned 5 degrees about its axis): the fit is not exact, yet the limb
+    // found from M2 to M1 is the inverse of the one from M1 to M2, and both hold the same pairs,
+    // so two independent matches are held to inverse maps.
+    Swing s = swing(1.0, 0.0);
+    s.target = moved(
+        moved(capsule(BASE, LENGTH, RADIUS, 0.96, 24), rotationAbout(Vec<3>::UnitZ(), 5.0), BASE),
+        s.R, BASE);
+    // The closest vertices of the coarser sampling are farther than the default tolerance.
+    RigidLimbOptions o;
+    o.maxResidual = 0.01;
+    const RigidLimbs<3> ab =
+        findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still, o);
+    const RigidLimbs<3> ba =
+        findRigidLimbs<3>(s.target, s.source, s.targetTips, s.sourceTips, s.still, o);
+    ASSERT_EQ(ab.limbs.size(), 1u);
+    ASSERT_EQ(ba.limbs.size(), 1u);
+    const RigidLimb<3>&f = ab.limbs[0], &r = ba.limbs[0];
+    ASSERT_TRUE(f.used) << f.reason;
+    ASSERT_TRUE(r.used) << r.reason;
+    EXPECT_GT(f.residual, 1e-4); // not an exact fit
+    EXPECT_NEAR(f.residual, r.residual, 1e-12);
+    EXPECT_NEAR(f.angle, r.angle, 1e-9);
+    EXPECT_NEAR(f.axialTurn, r.axialTurn, 1e-9);
+    EXPECT_LT((f.rotation * r.rotation - Mat<3>::Identity()).norm(), 1e-12);
+    for (const Vec<3>& x : s.source.points)
+        EXPECT_LT((r.map(f.map(x)) - x).norm(), 1e-12);
+    // The same pairs: M1's samples first one way, M2's first the other way.
+    ASSERT_EQ(ab.source.size(), ba.source.size());
+    const std::size_t n = ab.source.size(), m = RigidLimbOptions().count / 2;
+    for (std::size_t k = 0; k < n; ++k) {
+        const std::size_t j = k < n - m ? k + m : k - (n - m);
+        EXPECT_LT((ab.source[k] - ba.target[j]).norm(), 1e-12) << k;
+        EXPECT_LT((ab.target[k] - ba.source[j]).norm(), 1e-12) << k;
+    }
 }
 
 TEST(RigidLimbs, BentLimbIsNotRigid)

@@ -630,7 +630,8 @@ matchOptionTable()
          "c_rl, the total weight of the rigid limbs' points, >= 0: when the automatic anchors "
          "act, each limb whose extremity moved farther than --rigid-limb-min-motion and that one "
          "rigid motion carries from M1 to M2 "
-         "(fitted by closest points, without a turn about its own axis) has --rigid-limb-count "
+         "(fitted by closest points both ways, so that the match M2 -> M1 holds the inverse "
+         "motion; without a turn about its own axis) has --rigid-limb-count "
          "points held at their images at every level, so that a round limb does not turn about "
          "its axis (docs/numerics.md \"Rigid limbs\"); 0: off (default " +
              both(DEFAULT_RIGID_LIMB_WEIGHT_3D, 0.0) + "; --preset paper: 0)",
@@ -653,7 +654,8 @@ matchOptionTable()
              o.rigidLimbAnchorRadius = parseDouble("--rigid-limb-anchor-radius", v);
          }},
         {"--rigid-limb-count", "N", "Landmarks (an addition to the paper)",
-         "points per rigid limb, half on each shape, >= 2 (default " +
+         "points per rigid limb, half on each shape (an even N: the match M2 -> M1 holds the "
+         "same pairs), >= 2 (default " +
              formatNumber(double(d.rigidLimbOptions.count)) + ")",
          [](O& o, const std::string& v) {
              const int n = parseInt("--rigid-limb-count", v);

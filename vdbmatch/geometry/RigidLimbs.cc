@@ -262,9 +262,11 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
 
         const double reach = opts.reach * limb.joint(),
                      targetReach = opts.targetReach * limb.joint();
-        std::vector<std::size_t> r1, r2, fit2;
-        for (std::size_t i = 0; i < g1.size(); ++i)
+        std::vector<std::size_t> r1, r2, fit1, fit2;
+        for (std::size_t i = 0; i < g1.size(); ++i) {
             if (g1[i] < reach) r1.push_back(i);
+            if (g1[i] < targetReach) fit1.push_back(i);
+        }
         for (std::size_t i = 0; i < g2.size(); ++i) {
             if (g2[i] < reach) r2.push_back(i);
             if (g2[i] < targetReach) fit2.push_back(i);
@@ -281,50 +283,61 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         Vec<D> c1, u1, c2, u2;
         principalAxis(unitSource, w1, r1, sourceTips[k], c1, u1);
         principalAxis(unitTarget, w2, r2, targetTips[k], c2, u2);
-        // Trimmed closest points from the least rotation between the axes.
+        // Trimmed closest points, both ways at once, from the least rotation between the axes:
+        // the pairs are M1's limb with its closest points on M2 and M2's limb with its closest
+        // points on M1, so that the fit of M2 onto M1 is the inverse motion.
         Mat<D> R = leastRotation<D>(u1, u2);
         Vec<D> t = c2 - R * c1;
-        std::vector<std::size_t> nearest(r1.size());
-        std::vector<double> dist(r1.size());
+        const std::size_t n1 = r1.size(), n = n1 + r2.size();
+        std::vector<Vec<D>> px(n), py(n);
+        std::vector<double> pw(n), dist(n);
+        for (std::size_t a = 0; a < n1; ++a) {
+            px[a] = unitSource.points[r1[a]];
+            pw[a] = w1[r1[a]];
+        }
+        for (std::size_t b = n1; b < n; ++b) {
+            py[b] = unitTarget.points[r2[b - n1]];
+            pw[b] = w2[r2[b - n1]];
+        }
         double residual = FAR;
         for (int it = 0; it < opts.iterations; ++it) {
-            detail::forEachIndex(r1.size(), opts.threaded, [&](std::size_t a) {
-                const Vec<D> y = R * unitSource.points[r1[a]] + t;
+            detail::forEachIndex(n, opts.threaded, [&](std::size_t a) {
+                const bool forward = a < n1;
+                const Vec<D> y =
+                    forward ? Vec<D>(R * px[a] + t) : Vec<D>(R.transpose() * (py[a] - t));
+                const Surface<D>& other = forward ? unitTarget : unitSource;
                 double best = FAR;
                 std::size_t bi = 0;
-                for (std::size_t j : fit2) {
-                    const double d = (unitTarget.points[j] - y).squaredNorm();
+                for (std::size_t j : forward ? fit2 : fit1) {
+                    const double d = (other.points[j] - y).squaredNorm();
                     if (d < best) {
                         best = d;
                         bi = j;
                     }
                 }
-                nearest[a] = bi;
+                (forward ? py[a] : px[a]) = other.points[bi];
                 dist[a] = std::sqrt(best);
             });
             std::vector<double> sorted = dist;
-            const std::size_t cut =
-                std::min(sorted.size() - 1, std::size_t(opts.trim * double(sorted.size())));
+            const std::size_t cut = std::min(n - 1, std::size_t(opts.trim * double(n)));
             std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(cut), sorted.end());
             const double limit = sorted[cut];
             double total = 0, sum = 0;
             Vec<D> mx = Vec<D>::Zero(), my = Vec<D>::Zero();
-            for (std::size_t a = 0; a < r1.size(); ++a) {
+            for (std::size_t a = 0; a < n; ++a) {
                 if (dist[a] > limit) continue;
-                const double wa = w1[r1[a]];
-                total += wa;
-                sum += wa * dist[a];
-                mx += wa * unitSource.points[r1[a]];
-                my += wa * unitTarget.points[nearest[a]];
+                total += pw[a];
+                sum += pw[a] * dist[a];
+                mx += pw[a] * px[a];
+                my += pw[a] * py[a];
             }
             residual = sum / total;
             mx /= total;
             my /= total;
             Mat<D> H = Mat<D>::Zero();
-            for (std::size_t a = 0; a < r1.size(); ++a) {
+            for (std::size_t a = 0; a < n; ++a) {
                 if (dist[a] > limit) continue;
-                H += w1[r1[a]] * (unitSource.points[r1[a]] - mx) *
-                     (unitTarget.points[nearest[a]] - my).transpose();
+                H += pw[a] * (px[a] - mx) * (py[a] - my).transpose();
             }
             Eigen::JacobiSVD<Mat<D>> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
             Mat<D> fix = Mat<D>::Identity();
@@ -336,12 +349,16 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         limb.residual = residual;
         Mat<D> rotation = R;
         if constexpr (D == 3) {
-            rotation = leastRotation<D>(u1, (R * u1).normalized());
+            // The axis of both limbs in M1's frame, the same either way round.
+            const Vec<D> u = (u1 + R.transpose() * u2).normalized();
+            rotation = leastRotation<D>(u, (R * u).normalized());
             limb.axialTurn = rotationAngle<D>(R * rotation.transpose());
         }
         limb.rotation = rotation;
-        limb.sourceCentre = c1;
-        limb.targetCentre = R * c1 + t;
+        // The pivot halfway between M1's centroid and where (R, t) takes M2's back, and its
+        // image: either way round the same pair of points.
+        limb.sourceCentre = 0.5 * (c1 + R.transpose() * (c2 - t));
+        limb.targetCentre = R * limb.sourceCentre + t;
         limb.angle = rotationAngle<D>(rotation);
         if (!(residual <= opts.maxResidual)) {
             std::ostringstream s;
@@ -354,8 +371,10 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         limb.used = true;
         const std::size_t half = opts.count / 2;
         for (std::size_t i : farthestSamples(unitSource, r1, sourceTips[k], opts.count - half)) {
+            const Vec<D> q = limb.map(unitSource.points[i]);
+            if (!((q.array() > 0).all() && (q.array() < 1).all())) continue; // off Omega
             out.source.push_back(unitSource.points[i]);
-            out.target.push_back(limb.map(unitSource.points[i]));
+            out.target.push_back(q);
         }
         for (std::size_t i : farthestSamples(unitTarget, r2, targetTips[k], half)) {
             const Vec<D> p = limb.inverse(unitTarget.points[i]);

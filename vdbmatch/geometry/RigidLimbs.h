@@ -18,17 +18,25 @@
 ///    shape), and J the smaller (J1 and J2 need not agree: where the shapes coincide changes
 ///    with the pose, 0.147 and 0.192 on the benchmark's swung leg); the limb is the vertices with g
 ///    < reach * J, away from the joint, where an articulation bends the skin;
-/// 3. the rigid motion (R, t) that best carries M1's limb onto M2's (the vertices of M2 with
-///    g2 < targetReach * J), by trimmed iterative closest points (point to point, weighted by
-///    the vertices' shares of the measure, the worst (1 - trim) of the pairs left out), from the
-///    least rotation between the limbs' principal axes; it must fit: the weighted mean distance
-///    of the kept pairs at most maxResidual, or the limb is not rigid and is left out;
-/// 4. in 3D, R without its turn about the limb's axis u (M1's principal axis): the least
-///    rotation taking u to R u (in 2D there is no such turn: R itself); the centroid c of M1's
-///    limb goes where (R, t) takes it;
-/// 5. count / 2 farthest-point samples of each limb, from its vertex nearest the tip: the
-///    samples p of M1 paired with their images, those q of M2 with their preimages, so that the
-///    match M2 -> M1 holds nearly the same pairs (its fit is made the other way round).
+/// 3. the rigid motion (R, t) that best carries M1's limb onto M2's, by trimmed iterative
+///    closest points made both ways at once: the pairs are the vertices of M1's limb with their
+///    closest vertices of M2 with g2 < targetReach * J, and the vertices of M2's limb with their
+///    closest vertices of M1 with g1 < targetReach * J (point to point, weighted by the vertices'
+///    shares of the measure, the worst (1 - trim) of all pairs left out), from the least rotation
+///    between the limbs' principal axes u1, u2. The fit is the same either way round: from M2 to
+///    M1 it gives (R^T, -R^T t). It must fit: the weighted mean distance of the kept pairs at
+///    most maxResidual, or the limb is not rigid and is left out;
+/// 4. in 3D, R without its turn about the limb's axis u = (u1 + R^T u2) / |...| (both limbs'
+///    axes in M1's frame): the least rotation taking u to R u (in 2D there is no such turn: R
+///    itself); it turns about the pivot p halfway between M1's limb centroid and where (R, t)
+///    takes M2's back, and p goes where (R, t) takes it. Either way round the rotation, the
+///    pivot and its image are the same, so the map from M2 to M1 is the inverse of the map
+///    from M1 to M2 (to rounding);
+/// 5. count / 2 farthest-point samples of each limb (count - count / 2 of M1's), from its vertex
+///    nearest the tip: the samples p of M1 paired with their images, those q of M2 with their
+///    preimages, so that the match M2 -> M1 holds the same pairs (for an even count) and two
+///    independent matches are held to inverse maps; a sample whose partner is off Omega is
+///    left out.
 /// Limits: a limb stretched or shortened along itself still fits (a cylinder slides along
 /// itself), and its points are then held where the rigid motion takes them; a limb bent at a
 /// second joint (a knee) does not fit and is left out, as a whole; the fit starts without a turn
@@ -52,7 +60,7 @@ struct RigidLimbOptions
 {
     double minMotion = 0.03;    ///< an extremity moved when |a - b| exceeds this
     double reach = 0.6;         ///< the limb: g < reach * J (0 < reach <= 1)
-    double targetReach = 0.8;   ///< the fit's target on M2: g2 < targetReach * J (>= reach)
+    double targetReach = 0.8;   ///< the fit's closest points: g < targetReach * J (>= reach)
     double trim = 0.9;          ///< share of the closest pairs the fit keeps (0 < trim <= 1)
     int iterations = 30;        ///< closest-point iterations, >= 1
     double maxResidual = 0.003; ///< the limb is rigid when the fit's mean distance is at most this
@@ -80,7 +88,7 @@ struct RigidLimbFit
 template <int D> struct RigidLimb : RigidLimbFit
 {
     Mat<D> rotation = Mat<D>::Identity();
-    Vec<D> sourceCentre = Vec<D>::Zero(), targetCentre = Vec<D>::Zero(); ///< c and its image
+    Vec<D> sourceCentre = Vec<D>::Zero(), targetCentre = Vec<D>::Zero(); ///< p and its image
     /// The map of the limb: x -> rotation (x - sourceCentre) + targetCentre.
     Vec<D> map(const Vec<D>& x) const { return rotation * (x - sourceCentre) + targetCentre; }
     Vec<D> inverse(const Vec<D>& y) const
