@@ -255,6 +255,79 @@ TEST(RigidLimbs, ThreadCountDoesNotChangeTheResult)
     }
 }
 
+TEST(RigidLimbs, LargeTurnsAboutTheAxisAreFound)
+{
+    // A flattened limb turned by 40 and 70 degrees about its own axis before the swing: out of
+    // reach of a fit started from the principal axes alone (it is left out as not rigid), found
+    // from the other starts, and removed from the map.
+    for (double twist : {40.0, 70.0}) {
+        const Swing s = swing(0.5, twist);
+        const RigidLimbs<3> limbs =
+            findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still);
+        ASSERT_EQ(limbs.limbs.size(), 1u);
+        const RigidLimb<3>& l = limbs.limbs[0];
+        ASSERT_TRUE(l.used) << twist << ": " << l.reason;
+        EXPECT_NEAR(l.axialTurn, twist, 2.0);
+        EXPECT_LT((l.rotation - s.R).norm(), 0.03) << twist;
+        RigidLimbOptions one;
+        one.starts = 1;
+        EXPECT_FALSE(findRigidLimbs<3>(s.source, s.target, s.sourceTips, s.targetTips, s.still, one)
+                         .limbs[0]
+                         .used)
+            << twist;
+    }
+}
+
+/// A closed polygon's outline, its edges sampled every @a step or less (counter-clockwise).
+Surface<2>
+outline(const std::vector<Vec<2>>& corners, double step)
+{
+    Surface<2> s;
+    for (std::size_t i = 0; i < corners.size(); ++i) {
+        const Vec<2> a = corners[i], b = corners[(i + 1) % corners.size()];
+        const int n = std::max(1, int(std::ceil((b - a).norm() / step)));
+        for (int k = 0; k < n; ++k)
+            s.points.push_back(a + (b - a) * (double(k) / n));
+    }
+    const int m = int(s.points.size());
+    for (int i = 0; i < m; ++i)
+        s.elements.push_back({i, (i + 1) % m});
+    return s;
+}
+
+TEST(RigidLimbs, HookedLimbIn2D)
+{
+    // An arm with its hand bent sideways at the end, swung by 90 degrees about its base, its tip
+    // found at the hand's far end on M2 but at the hand's inner corner on M1 (extremities are
+    // not corresponding points): the two limbs' parts differ, their principal axes do not turn
+    // by the swing, and a fit started from them alone ends near no turn at all and is left out;
+    // the other starts find the swing.
+    const Vec<2> base(0.45, 0.3);
+    const std::vector<Vec<2>> corners = {base + Vec<2>(0.04, 0),     base + Vec<2>(0.04, 0.3),
+                                         base + Vec<2>(0.14, 0.3),   base + Vec<2>(0.14, 0.36),
+                                         base + Vec<2>(-0.04, 0.36), base + Vec<2>(-0.04, 0)};
+    const Surface<2> a = outline(corners, 0.004);
+    const double angle = 90 * M_PI / 180;
+    Mat<2> R;
+    R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
+    Surface<2> b = a;
+    for (Vec<2>& p : b.points)
+        p = R * (p - base) + base;
+    const std::vector<Vec<2>> tips1 = {base + Vec<2>(0.10, 0.30)},
+                              tips2 = {R * Vec<2>(0.14, 0.33) + base}, still = {base};
+    const RigidLimbs<2> limbs = findRigidLimbs<2>(a, b, tips1, tips2, still);
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    ASSERT_TRUE(limbs.limbs[0].used) << limbs.limbs[0].reason;
+    EXPECT_NEAR(limbs.limbs[0].angle, 90.0, 2.0);
+    for (std::size_t k = 0; k < limbs.source.size(); ++k)
+        EXPECT_LT((limbs.target[k] - (R * (limbs.source[k] - base) + base)).norm(), 0.01) << k;
+    RigidLimbOptions one;
+    one.starts = 1;
+    const RigidLimb<2> first = findRigidLimbs<2>(a, b, tips1, tips2, still, one).limbs[0];
+    EXPECT_FALSE(first.used);
+    EXPECT_LT(first.angle, 10.0);
+}
+
 TEST(RigidLimbs, SwungStadiumIn2D)
 {
     // The 2D outline of the capsule's section (a stadium) swung by 60 degrees about its base.

@@ -1,7 +1,9 @@
 #include <vdbmatch/Parallel.h>
+#include <vdbmatch/geometry/NearestPoints.h>
 #include <vdbmatch/geometry/RigidLimbs.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <openvdb/Exceptions.h>
 
@@ -20,6 +22,9 @@ namespace {
 
 constexpr double FAR = std::numeric_limits<double>::infinity();
 constexpr double DEGREES = 180.0 / 3.14159265358979323846;
+/// Fits from different starts this close to the closest (relative to it, or to the tolerance
+/// if larger) count as equally close.
+constexpr double START_TIE = 0.1;
 
 /// Each vertex's share of the surface's measure: 1/D of each element's length or area.
 template <int D>
@@ -144,6 +149,23 @@ leastRotation(const Vec<D>& a, const Vec<D>& b)
     }
 }
 
+/// The rotation by @a degrees about the unit vector @a axis (2D: about the plane's normal; the
+/// axis is not used).
+template <int D>
+Mat<D>
+turnAbout(const Vec<D>& axis, double degrees)
+{
+    const double a = degrees / DEGREES;
+    if constexpr (D == 2) {
+        (void)axis;
+        Mat<2> r;
+        r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+        return r;
+    } else {
+        return Eigen::AngleAxis<Real>(a, axis).toRotationMatrix();
+    }
+}
+
 template <int D>
 double
 rotationAngle(const Mat<D>& r)
@@ -222,13 +244,14 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     checkPoints(still, "the still points");
     const bool ok = opts.minMotion >= 0 && std::isfinite(opts.minMotion) && opts.reach > 0 &&
                     opts.reach <= 1 && opts.targetReach >= opts.reach && opts.targetReach <= 1 &&
-                    opts.trim > 0 && opts.trim <= 1 && opts.iterations >= 1 &&
+                    opts.trim > 0 && opts.trim <= 1 && opts.iterations >= 1 && opts.starts >= 1 &&
                     opts.maxResidual >= 0 && std::isfinite(opts.maxResidual) && opts.count >= 2;
     if (!ok) {
-        OPENVDB_THROW(openvdb::ValueError,
-                      "findRigidLimbs: options out of range (minMotion >= 0, 0 < reach <= "
-                      "targetReach <= 1, 0 < trim <= 1, iterations >= 1, maxResidual >= 0, "
-                      "count >= 2)");
+        OPENVDB_THROW(
+            openvdb::ValueError,
+            "findRigidLimbs: options out of range (minMotion >= 0, 0 < reach <= "
+            "targetReach <= 1, 0 < trim <= 1, iterations >= 1, starts >= 1, maxResidual >= 0, "
+            "count >= 2)");
     }
     RigidLimbs<D> out;
     if (still.empty()) return out;
@@ -283,11 +306,11 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         Vec<D> c1, u1, c2, u2;
         principalAxis(unitSource, w1, r1, sourceTips[k], c1, u1);
         principalAxis(unitTarget, w2, r2, targetTips[k], c2, u2);
-        // Trimmed closest points, both ways at once, from the least rotation between the axes:
-        // the pairs are M1's limb with its closest points on M2 and M2's limb with its closest
-        // points on M1, so that the fit of M2 onto M1 is the inverse motion.
-        Mat<D> R = leastRotation<D>(u1, u2);
-        Vec<D> t = c2 - R * c1;
+        // Trimmed closest points, both ways at once: the pairs are M1's limb with its closest
+        // points on M2 and M2's limb with its closest points on M1, so that the fit of M2 onto
+        // M1 is the inverse motion. From each of `starts` rotations (the least rotation between
+        // the axes, turned about them in equal steps: the inverses of the starts the other way
+        // round), the one that ends closest.
         const std::size_t n1 = r1.size(), n = n1 + r2.size();
         std::vector<Vec<D>> px(n), py(n);
         std::vector<double> pw(n), dist(n);
@@ -299,53 +322,82 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             py[b] = unitTarget.points[r2[b - n1]];
             pw[b] = w2[r2[b - n1]];
         }
-        double residual = FAR;
-        for (int it = 0; it < opts.iterations; ++it) {
-            detail::forEachIndex(n, opts.threaded, [&](std::size_t a) {
-                const bool forward = a < n1;
-                const Vec<D> y =
-                    forward ? Vec<D>(R * px[a] + t) : Vec<D>(R.transpose() * (py[a] - t));
-                const Surface<D>& other = forward ? unitTarget : unitSource;
-                double best = FAR;
-                std::size_t bi = 0;
-                for (std::size_t j : forward ? fit2 : fit1) {
-                    const double d = (other.points[j] - y).squaredNorm();
-                    if (d < best) {
-                        best = d;
-                        bi = j;
-                    }
+        auto pointsOf = [](const Surface<D>& m, const std::vector<std::size_t>& idx) {
+            std::vector<Vec<D>> p;
+            p.reserve(idx.size());
+            for (std::size_t i : idx)
+                p.push_back(m.points[i]);
+            return p;
+        };
+        const NearestPoints<D> tree1(pointsOf(unitSource, fit1)), tree2(pointsOf(unitTarget, fit2));
+        auto fit = [&](Mat<D>& R, Vec<D>& t) {
+            double residual = FAR;
+            for (int it = 0; it < opts.iterations; ++it) {
+                detail::forEachIndex(n, opts.threaded, [&](std::size_t a) {
+                    const bool forward = a < n1;
+                    const Vec<D> y =
+                        forward ? Vec<D>(R * px[a] + t) : Vec<D>(R.transpose() * (py[a] - t));
+                    const auto [j, d] = (forward ? tree2 : tree1).nearest(y);
+                    (forward ? py[a] : px[a]) =
+                        forward ? unitTarget.points[fit2[j]] : unitSource.points[fit1[j]];
+                    dist[a] = std::sqrt(d);
+                });
+                std::vector<double> sorted = dist;
+                const std::size_t cut = std::min(n - 1, std::size_t(opts.trim * double(n)));
+                std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(cut),
+                                 sorted.end());
+                const double limit = sorted[cut];
+                double total = 0, sum = 0;
+                Vec<D> mx = Vec<D>::Zero(), my = Vec<D>::Zero();
+                for (std::size_t a = 0; a < n; ++a) {
+                    if (dist[a] > limit) continue;
+                    total += pw[a];
+                    sum += pw[a] * dist[a];
+                    mx += pw[a] * px[a];
+                    my += pw[a] * py[a];
                 }
-                (forward ? py[a] : px[a]) = other.points[bi];
-                dist[a] = std::sqrt(best);
-            });
-            std::vector<double> sorted = dist;
-            const std::size_t cut = std::min(n - 1, std::size_t(opts.trim * double(n)));
-            std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(cut), sorted.end());
-            const double limit = sorted[cut];
-            double total = 0, sum = 0;
-            Vec<D> mx = Vec<D>::Zero(), my = Vec<D>::Zero();
-            for (std::size_t a = 0; a < n; ++a) {
-                if (dist[a] > limit) continue;
-                total += pw[a];
-                sum += pw[a] * dist[a];
-                mx += pw[a] * px[a];
-                my += pw[a] * py[a];
+                residual = sum / total;
+                mx /= total;
+                my /= total;
+                Mat<D> H = Mat<D>::Zero();
+                for (std::size_t a = 0; a < n; ++a) {
+                    if (dist[a] > limit) continue;
+                    H += pw[a] * (px[a] - mx) * (py[a] - my).transpose();
+                }
+                Eigen::JacobiSVD<Mat<D>> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
+                Mat<D> fix = Mat<D>::Identity();
+                fix(D - 1, D - 1) =
+                    (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
+                R = svd.matrixV() * fix * svd.matrixU().transpose();
+                t = my - R * mx;
             }
-            residual = sum / total;
-            mx /= total;
-            my /= total;
-            Mat<D> H = Mat<D>::Zero();
-            for (std::size_t a = 0; a < n; ++a) {
-                if (dist[a] > limit) continue;
-                H += pw[a] * (px[a] - mx) * (py[a] - my).transpose();
-            }
-            Eigen::JacobiSVD<Mat<D>> svd(H, Eigen::ComputeFullU | Eigen::ComputeFullV);
-            Mat<D> fix = Mat<D>::Identity();
-            fix(D - 1, D - 1) =
-                (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1 : 1;
-            R = svd.matrixV() * fix * svd.matrixU().transpose();
-            t = my - R * mx;
+            return residual;
+        };
+        const Mat<D> axes = leastRotation<D>(u1, u2);
+        std::vector<Mat<D>> Rs(std::size_t(opts.starts));
+        std::vector<Vec<D>> ts(Rs.size());
+        std::vector<double> rs(Rs.size());
+        for (std::size_t start = 0; start < Rs.size(); ++start) {
+            Rs[start] = turnAbout<D>(u2, 360.0 * double(start) / double(Rs.size())) * axes;
+            ts[start] = c2 - Rs[start] * c1;
+            rs[start] = fit(Rs[start], ts[start]);
         }
+        // Of the fits as close as the closest, to START_TIE of it or of the tolerance, the least
+        // turned from the axes (a flattened limb fits as well half a turn about its axis).
+        const double closest = *std::min_element(rs.begin(), rs.end());
+        std::size_t chosen = 0;
+        double least = FAR;
+        for (std::size_t start = 0; start < Rs.size(); ++start) {
+            const double turn = rotationAngle<D>(Rs[start] * axes.transpose());
+            if (rs[start] <= closest + START_TIE * std::max(closest, opts.maxResidual) &&
+                turn < least) {
+                least = turn;
+                chosen = start;
+            }
+        }
+        const Mat<D> R = Rs[chosen];
+        const Vec<D> t = ts[chosen];
+        const double residual = rs[chosen];
         limb.residual = residual;
         Mat<D> rotation = R;
         if constexpr (D == 3) {

@@ -63,6 +63,7 @@ struct RigidLimbOptions
     double targetReach = 0.8;   ///< the fit's closest points: g < targetReach * J (>= reach)
     double trim = 0.9;          ///< share of the closest pairs the fit keeps (0 < trim <= 1)
     int iterations = 30;        ///< closest-point iterations, >= 1
+    int starts = 12;            ///< rotations the fit starts from (turns about the axes), >= 1
     double maxResidual = 0.003; ///< the limb is rigid when the fit's mean distance is at most this
 
     std::size_t count = 20;       ///< samples per limb, both shapes together (>= 2)
