@@ -829,20 +829,30 @@ TEST(Match, AnchorsOnlyForAnArticulation)
 
 TEST(Match, RigidLimbsRefuseANonRigidArm)
 {
-    // The rigid limbs (geometry/RigidLimbs.h) act with the anchors: on by default in 3D only
-    // (a planar limb has no turn about its own axis), off in the paper's preset. Here, in 2D,
-    // turned on: the star's arm turned by 30 degrees about the centre is the moving limb, but
-    // its waists turn by half as much, so it is not rigid: match() reports it with the fit's
-    // distance, holds no point, keeps the anchors' radius, and runs as without the limbs. The
-    // fit on rigid limbs is tested in geometry/TestRigidLimbs.cc; a held limb in a whole match
-    // (points, nearer anchors, effect on the error) in tests/bench/test_rigid_limbs.py.
-    EXPECT_EQ(MatchOptions::defaults(3).rigidLimbWeight, DEFAULT_RIGID_LIMB_WEIGHT_3D);
+    // The rigid limbs (geometry/RigidLimbs.h) act with the anchors: on by default (the nearer
+    // anchors in 3D only), off in the paper's preset. Here, in 2D: the star's arm turned by 30
+    // degrees about the centre and shortened is the moving limb, but not rigid (turned alone, it
+    // fits within the tolerance: its waists turn half as much, but lie beyond the limb's
+    // reach): match() reports it with the fit's distance, holds no point, keeps the anchors'
+    // radius, and runs as without the limbs. The fit on rigid limbs is tested in
+    // geometry/TestRigidLimbs.cc; a held limb in a whole match (points, nearer anchors, effect on
+    // the error) in tests/bench/test_rigid_limbs.py.
+    EXPECT_EQ(MatchOptions::defaults(3).rigidLimbWeight, DEFAULT_RIGID_LIMB_WEIGHT);
     EXPECT_EQ(MatchOptions::defaults(3).rigidLimbAnchorRadius, DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D);
-    EXPECT_EQ(MatchOptions::defaults(2).rigidLimbWeight, 0.0);
+    EXPECT_EQ(MatchOptions::defaults(2).rigidLimbWeight, DEFAULT_RIGID_LIMB_WEIGHT);
+    EXPECT_EQ(MatchOptions::defaults(2).rigidLimbAnchorRadius, 0.0);
     EXPECT_EQ(MatchOptions::paper(3).rigidLimbWeight, 0.0);
     EXPECT_EQ(MatchOptions::paper(3).rigidLimbAnchorRadius, 0.0);
     const auto [rest, oneArm] = starPose();
-    const Surface<2> a = starOutline(rest, 24), b = starOutline(oneArm, 24);
+    const Surface<2> a = starOutline(rest, 24);
+    // The turned arm also shortened by 30% beyond 0.15 of the centre: its sides turn toward
+    // each other, which no rigid motion does.
+    Surface<2> b = starOutline(oneArm, 24);
+    for (Vec<2>& p : b.points) {
+        const double r = p.norm(),
+                     da = std::remainder(std::atan2(p[1], p[0]) - oneArm[0], 2 * M_PI);
+        if (r > 0.15 && std::abs(da) < 0.5) p *= (0.15 + 0.7 * (r - 0.15)) / r;
+    }
     MatchOptions opts = MatchOptions::defaults(2);
     opts.multiscale.minLevel = 4;
     opts.multiscale.maxLevel = 5;
@@ -876,6 +886,43 @@ TEST(Match, RigidLimbsRefuseANonRigidArm)
     bad = opts;
     bad.rigidLimbAnchorRadius = std::nan("");
     EXPECT_THROW(bad.validate(2), openvdb::ValueError);
+}
+
+TEST(Match, RigidLimbsTakeEveryMovingExtremity)
+{
+    // Two of the star's arms turned, the first by 30 degrees (its tip beyond sigma of the first
+    // level), the third by 20 (its tip short of sigma, but farther than half the first's): once
+    // one limb moved beyond sigma, both are limbs, so that limbs swung alike are held alike.
+    // With the threshold above the largest motion, none is.
+    const auto [rest, oneArm] = starPose();
+    std::vector<double> twoArms = oneArm;
+    twoArms[2] += 20 * M_PI / 180;
+    const Surface<2> a = starOutline(rest, 24), b = starOutline(twoArms, 24);
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 4;
+    const UnitBoxPlacement placement = placeInUnitBox(a, b, opts.margin);
+    const MatchResult<2> r = match<2>(a, b, placement, opts);
+    ASSERT_TRUE(r.isComplete());
+    const AutoLandmarkSummary& s = r.autoLandmarks;
+    ASSERT_FALSE(s.anchors.empty()) << s.anchorReason;
+    const double sigma = opts.multiscale.energyAt(4).sigmaFactor / 16.0;
+    std::vector<double> motion;
+    for (std::size_t k = 0; k < s.source.size(); ++k)
+        motion.push_back((s.source[k] - s.target[k]).length() * placement.scale);
+    const double largest = *std::max_element(motion.begin(), motion.end());
+    ASSERT_GT(largest, sigma);
+    EXPECT_NEAR(s.limbMinMotion, 0.5 * largest, 1e-12);
+    ASSERT_EQ(s.limbs.size(), 2u);
+    std::vector<double> moved;
+    for (const RigidLimbFit& l : s.limbs)
+        moved.push_back(motion[l.extremity]);
+    std::sort(moved.begin(), moved.end());
+    EXPECT_LT(moved[0], sigma); // the third arm: held for the first's sake
+    EXPECT_GT(moved[0], 0.5 * largest);
+    MatchOptions high = opts;
+    high.rigidLimbMinMotion = largest / sigma * 1.01;
+    EXPECT_TRUE(match<2>(a, b, placement, high).autoLandmarks.limbs.empty());
 }
 
 TEST(Match, AnchorsActBesideGivenLandmarks)

@@ -154,7 +154,7 @@ MatchOptions::defaults(int dim)
     opts.hessianLatticeNoiseFactor = dim == 3 ? LATTICE_NOISE_SMOOTHING_FACTOR_3D : 0.0;
     opts.noiseBendingPasses = DEFAULT_NOISE_BENDING_PASSES;
     opts.anchorNoiseFactor = dim == 3 ? DEFAULT_ANCHOR_NOISE_FACTOR_3D : 0.0;
-    opts.rigidLimbWeight = dim == 3 ? DEFAULT_RIGID_LIMB_WEIGHT_3D : 0.0;
+    opts.rigidLimbWeight = DEFAULT_RIGID_LIMB_WEIGHT;
     opts.rigidLimbAnchorRadius = dim == 3 ? DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D : 0.0;
     return opts;
 }
@@ -487,14 +487,23 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         // Rigid limbs: the moving extremities' limbs, from the anchors' joint.
         if (opts.rigidLimbWeight > 0 && !anchors.points.empty()) {
             std::vector<Vec<D>> tipsA, tipsB;
+            double largest = 0;
             for (const auto& [i, j] : pairing.pairs) {
                 tipsA.push_back(a.points[i]);
                 tipsB.push_back(b.points[j]);
+                largest = std::max(largest, (a.points[i] - b.points[j]).norm());
             }
             RigidLimbOptions lo = opts.rigidLimbOptions;
             lo.threaded = opts.threaded;
+            // When some extremity moved beyond K sigma of the first level, every extremity that
+            // moves (farther than ANCHOR_STILL_RATIO of the largest motion, the anchors' own
+            // test of what stays) is a limb too, so that two limbs swung alike are held alike
+            // though one of them moved a little less than K sigma.
             lo.minMotion = opts.rigidLimbMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
                            std::ldexp(1.0, -first);
+            if (largest > lo.minMotion) {
+                lo.minMotion = std::min(lo.minMotion, ANCHOR_STILL_RATIO * largest);
+            }
             out.limbMinMotion = lo.minMotion;
             const RigidLimbs<D> limbs =
                 findRigidLimbs<D>(unitSource, unitTarget, tipsA, tipsB, anchors.points, lo);

@@ -103,10 +103,11 @@ constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 30000;
 /// leave coinciding parts that may have slid along themselves: docs/numerics.md "Automatic
 /// anchors".
 constexpr double ANCHOR_STILL_RATIO = 0.5;
-/// Default c_rl, the total weight of the rigid limbs' points (MatchOptions::rigidLimbWeight) in
-/// 3D: 20 points of one limb weigh 500 each, five times an anchor (docs/numerics.md "Rigid
-/// limbs"). 2D: off (a planar limb has no turn about its own axis to fix).
-constexpr double DEFAULT_RIGID_LIMB_WEIGHT_3D = 1e4;
+/// Default c_rl, the total weight of the rigid limbs' points (MatchOptions::rigidLimbWeight), in
+/// 2D and 3D: 20 points of one limb weigh 500 each, five times an anchor (docs/numerics.md
+/// "Rigid limbs"; in 2D since 2026-12-02, when the fit learnt to start from more than the
+/// principal axes).
+constexpr double DEFAULT_RIGID_LIMB_WEIGHT = 1e4;
 /// Default MatchOptions::rigidLimbAnchorRadius in 3D: half the anchors' radius when a rigid limb
 /// is held (docs/numerics.md "Rigid limbs").
 constexpr double DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D = 0.015;
@@ -301,12 +302,15 @@ struct MatchOptions
     /// turn about its own axis (geometry/RigidLimbs.h); count points of each limb that the fit
     /// finds rigid are held at every level at their images, beside the anchors, each with
     /// weight rigidLimbWeight / (their number). A round limb's turn about its axis is what no
-    /// shape term sees (docs/results.md "The swung leg turns about its own axis"). c_rl = 0: off
-    /// (paper(), and defaults(2)); defaults(3): DEFAULT_RIGID_LIMB_WEIGHT_3D.
+    /// shape term sees (docs/results.md "The swung leg turns about its own axis"), and a limb
+    /// swung far is carried whole from the coarse levels on. c_rl = 0: off (paper());
+    /// defaults(): DEFAULT_RIGID_LIMB_WEIGHT.
     double rigidLimbWeight = 0;
-    /// Only the limbs whose extremity moved farther than this many sigma of the first level
+    /// Limbs only when some extremity moved farther than this many sigma of the first level
     /// (>= 0): a limb nearer than the first band is found by the match term from the start; one
-    /// beyond it is carried far by the coarse levels, which is where a round limb turns.
+    /// beyond it is carried far by the coarse levels, which is where a round limb turns. Then
+    /// every extremity that moved farther than that, or than ANCHOR_STILL_RATIO of the largest
+    /// motion, is a limb (two limbs swung alike are held alike).
     double rigidLimbMinMotion = 1;
     /// When a rigid limb is held, the anchors are sought again with this patch radius (Omega
     /// units), if smaller than anchorOptions.radius: a limb swung beyond the first band drags
@@ -459,7 +463,8 @@ struct AutoLandmarkSummary
     /// images, world units (2D: z = 0).
     /// RigidLimbFit::extremity is the row of source/target.
     std::vector<RigidLimbFit> limbs;
-    double limbMinMotion = 0; ///< the threshold, rigidLimbMinMotion sigma of the first level
+    double limbMinMotion = 0; ///< the threshold (Omega units): rigidLimbMinMotion sigma of the
+                              ///< first level, or less (MatchOptions::rigidLimbMinMotion)
     /// The anchors' patch radius (StillAnchorOptions::radius, Omega units): the option's, or
     /// MatchOptions::rigidLimbAnchorRadius when a rigid limb is held; 0 when not sought.
     double anchorRadius = 0;

@@ -67,8 +67,12 @@ def given(tmp_path_factory):
     root = tmp_path_factory.mktemp("given")
     marks = ["--landmarks", str(root / "pairs" / PAIR / "landmarks_source.csv"),
              str(root / "pairs" / PAIR / "landmarks_target.csv")]
-    return generate_and_match(root, PAIR, {"on": marks + ["--landmark-anchors", "on"],
-                                           "off": marks + ["--landmark-anchors", "off"]})
+    # Without the rigid limbs, which act with the anchors and would be measured with them here
+    # (tests/bench/test_rigid_limbs.py): they carry the arms whole and leave the skin under the
+    # armpits to slide, so the still vertices' error rises while the whole error falls.
+    off = ["--rigid-limb-weight", "0"]
+    return generate_and_match(root, PAIR, {"on": marks + off + ["--landmark-anchors", "on"],
+                                           "off": marks + off + ["--landmark-anchors", "off"]})
 
 
 def errors(pair, run):

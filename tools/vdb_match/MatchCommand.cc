@@ -634,13 +634,14 @@ matchOptionTable()
          "motion; without a turn about its own axis) has --rigid-limb-count "
          "points held at their images at every level, so that a round limb does not turn about "
          "its axis (docs/numerics.md \"Rigid limbs\"); 0: off (default " +
-             both(DEFAULT_RIGID_LIMB_WEIGHT_3D, 0.0) + "; --preset paper: 0)",
+             formatNumber(DEFAULT_RIGID_LIMB_WEIGHT) + "; --preset paper: 0)",
          [](O& o, const std::string& v) {
              o.rigidLimbWeight = parseDouble("--rigid-limb-weight", v);
          }},
         {"--rigid-limb-min-motion", "K", "Landmarks (an addition to the paper)",
-         "rigid limbs only for the extremities that moved farther than K sigma of the first "
-         "level, >= 0 (default " +
+         "rigid limbs only when an extremity moved farther than K sigma of the first level, "
+         "and then for each extremity that moved farther than that or than half the largest "
+         "motion, >= 0 (default " +
              formatNumber(d.rigidLimbMinMotion) + ")",
          [](O& o, const std::string& v) {
              o.rigidLimbMinMotion = parseDouble("--rigid-limb-min-motion", v);

@@ -22,6 +22,8 @@ namespace {
 
 constexpr double FAR = std::numeric_limits<double>::infinity();
 constexpr double DEGREES = 180.0 / 3.14159265358979323846;
+/// The geodesic distance's chords span up to this many edges (chordGraph).
+constexpr int CHORD_RINGS = 3;
 /// Fits from different starts this close to the closest (relative to it, or to the tolerance
 /// if larger) count as equally close.
 constexpr double START_TIE = 0.1;
@@ -47,10 +49,14 @@ vertexShares(const Surface<D>& s)
     return w;
 }
 
-/// Geodesic distance along the element edges from vertex @a from (Dijkstra; ties by index).
+/// The graph of the geodesic distance: each vertex joined to the vertices within CHORD_RINGS
+/// edges of it, by the straight distance. Chords over a few edges follow the surface as edges
+/// do, but do not add up a noisy surface's zigzag: on the benchmark's 2D scans (noise of 0.2%
+/// of the shape's diagonal) paths along the edges are about 1.5x longer than on the noise-free
+/// outline, over three edges about 1.06x.
 template <int D>
-std::vector<double>
-edgeDistance(const Surface<D>& s, std::size_t from)
+std::vector<std::vector<std::pair<std::size_t, double>>>
+chordGraph(const Surface<D>& s)
 {
     const std::size_t n = s.points.size();
     std::vector<std::vector<std::size_t>> next(n);
@@ -61,7 +67,40 @@ edgeDistance(const Surface<D>& s, std::size_t from)
             next[j].push_back(i);
         }
     }
-    std::vector<double> g(n, FAR);
+    for (auto& v : next) {
+        std::sort(v.begin(), v.end());
+        v.erase(std::unique(v.begin(), v.end()), v.end());
+    }
+    std::vector<std::vector<std::pair<std::size_t, double>>> graph(n);
+    std::vector<int> seen(n, -1);
+    for (std::size_t i = 0; i < n; ++i) {
+        std::vector<std::size_t> ring = {i}, reached;
+        seen[i] = int(i);
+        for (int r = 0; r < CHORD_RINGS; ++r) {
+            std::vector<std::size_t> outer;
+            for (std::size_t v : ring) {
+                for (std::size_t w : next[v]) {
+                    if (seen[w] == int(i)) continue;
+                    seen[w] = int(i);
+                    outer.push_back(w);
+                    reached.push_back(w);
+                }
+            }
+            ring.swap(outer);
+        }
+        std::sort(reached.begin(), reached.end());
+        for (std::size_t w : reached)
+            graph[i].push_back({w, (s.points[i] - s.points[w]).norm()});
+    }
+    return graph;
+}
+
+/// Geodesic distance over @a graph (chordGraph) from vertex @a from (Dijkstra).
+std::vector<double>
+geodesicDistance(const std::vector<std::vector<std::pair<std::size_t, double>>>& graph,
+                 std::size_t from)
+{
+    std::vector<double> g(graph.size(), FAR);
     using Item = std::pair<double, std::size_t>;
     std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
     g[from] = 0;
@@ -70,8 +109,8 @@ edgeDistance(const Surface<D>& s, std::size_t from)
         const auto [d, i] = queue.top();
         queue.pop();
         if (d > g[i]) continue;
-        for (std::size_t j : next[i]) {
-            const double dj = d + (s.points[i] - s.points[j]).norm();
+        for (const auto& [j, w] : graph[i]) {
+            const double dj = d + w;
             if (dj < g[j]) {
                 g[j] = dj;
                 queue.push({dj, j});
@@ -261,15 +300,21 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         still1.push_back(nearestVertex(unitSource, p));
         still2.push_back(nearestVertex(unitTarget, p));
     }
+    std::vector<std::vector<std::pair<std::size_t, double>>> graph1, graph2; // when needed
     for (std::size_t k = 0; k < sourceTips.size(); ++k) {
         if (!((sourceTips[k] - targetTips[k]).norm() > opts.minMotion)) continue;
+        if (graph1.empty()) {
+            detail::invokeBoth(
+                opts.threaded, [&] { graph1 = chordGraph(unitSource); },
+                [&] { graph2 = chordGraph(unitTarget); });
+        }
         RigidLimb<D> limb;
         limb.extremity = k;
         std::vector<double> g1, g2;
         detail::invokeBoth(
             opts.threaded,
-            [&] { g1 = edgeDistance(unitSource, nearestVertex(unitSource, sourceTips[k])); },
-            [&] { g2 = edgeDistance(unitTarget, nearestVertex(unitTarget, targetTips[k])); });
+            [&] { g1 = geodesicDistance(graph1, nearestVertex(unitSource, sourceTips[k])); },
+            [&] { g2 = geodesicDistance(graph2, nearestVertex(unitTarget, targetTips[k])); });
         double j1 = FAR, j2 = FAR;
         for (std::size_t i : still1)
             j1 = std::min(j1, g1[i]);

@@ -11,8 +11,10 @@
 /// and for a ball joint that swings; wrong for a forearm's pronation, which no shape term can
 /// tell either). For each pair of paired extremities (a in M1, b in M2, Extremities.h) that
 /// moved farther than minMotion:
-/// 1. g1, g2: the geodesic distance along the edges of each surface from its vertex nearest to
-///    a (resp. b), by Dijkstra;
+/// 1. g1, g2: the geodesic distance over each surface from its vertex nearest to a (resp. b),
+///    by Dijkstra over chords: each vertex joined to the vertices within three edges of it by
+///    the straight distance (paths along the edges of a noisy scan add up its zigzag, 1.5x
+///    longer on the benchmark's 2D scans, which shrank the scan's limb against the source's);
 /// 2. the joint is where the limb meets what stayed: J1, J2 = the least g1, g2 over the still
 ///    points (the automatic anchors, StillAnchors.h, each taken at its nearest vertex on each
 ///    shape), and J the smaller (J1 and J2 need not agree: where the shapes coincide changes
@@ -22,9 +24,15 @@
 ///    closest points made both ways at once: the pairs are the vertices of M1's limb with their
 ///    closest vertices of M2 with g2 < targetReach * J, and the vertices of M2's limb with their
 ///    closest vertices of M1 with g1 < targetReach * J (point to point, weighted by the vertices'
-///    shares of the measure, the worst (1 - trim) of all pairs left out), from the least rotation
-///    between the limbs' principal axes u1, u2. The fit is the same either way round: from M2 to
-///    M1 it gives (R^T, -R^T t). It must fit: the weighted mean distance of the kept pairs at
+///    shares of the measure, the worst (1 - trim) of all pairs left out; closest points exact,
+///    NearestPoints.h), from `starts` rotations: the least rotation between the limbs'
+///    principal axes u1, u2, turned about u2 by 360 / starts degrees at a time (the limbs' parts
+///    near the tips need not correspond, and a round limb's turn about its axis is anyone's, so
+///    the axes alone can start the fit far off). Of the fits that end as close as the closest
+///    (within START_TIE = 10% of it or of maxResidual, whichever is larger) the one least
+///    turned from the axes is kept: a flattened limb fits as well half a turn about its axis.
+///    The fit is the same either way round: from M2 to M1 it gives (R^T, -R^T t) (its starts
+///    are the inverses of these). It must fit: the weighted mean distance of the kept pairs at
 ///    most maxResidual, or the limb is not rigid and is left out;
 /// 4. in 3D, R without its turn about the limb's axis u = (u1 + R^T u2) / |...| (both limbs'
 ///    axes in M1's frame): the least rotation taking u to R u (in 2D there is no such turn: R
@@ -39,9 +47,9 @@
 ///    left out.
 /// Limits: a limb stretched or shortened along itself still fits (a cylinder slides along
 /// itself), and its points are then held where the rigid motion takes them; a limb bent at a
-/// second joint (a knee) does not fit and is left out, as a whole; the fit starts without a turn
-/// about the axis and finds a small one on a flat limb (10 degrees in the tests), but a flat
-/// limb turned by 20 degrees or more stays out of its reach and is left out as not rigid.
+/// second joint (a knee) does not fit and is left out, as a whole; a flat limb turned about its
+/// axis is found at any turn (10, 40 and 70 degrees in the tests; one start alone reaches 10
+/// but not 20 degrees); on a round limb every turn fits alike and the least is kept.
 /// The result does not depend on the thread count.
 #pragma once
 
