@@ -32,23 +32,33 @@ PAIR = "animal_leg_swing"
 ARMS = "figure_arms_horizontal"
 
 
-@pytest.fixture(scope="module")
-def runs(tmp_path_factory):
+def generate_and_match(root, name, ext, levels):
+    """make_pairs.py --only name into root, then the default and --rigid-limb-weight 0 forward
+    at levels; returns the pair's directory and {"on": run, "off": run}."""
     vdb_match = os.environ.get("VDB_MATCH")
     if not vdb_match:
         pytest.fail("VDB_MATCH (the vdb_match executable) is not set")
-    root = tmp_path_factory.mktemp("limbs")
-    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", PAIR], check=True,
+    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", name], check=True,
                    stdout=subprocess.DEVNULL)
-    pair = root / "pairs" / PAIR
+    pair = root / "pairs" / name
     out = {}
     for label, extra in {"on": [], "off": ["--rigid-limb-weight", "0"]}.items():
         run = root / label
-        subprocess.run([vdb_match, "match", str(pair / "source.obj"),
-                        str(pair / "target_resampled.obj"), "-o", str(run), "--levels", "4..6",
-                        "--threads", "2", "--quiet"] + extra, check=True)
+        subprocess.run([vdb_match, "match", str(pair / ("source." + ext)),
+                        str(pair / ("target_resampled." + ext)), "-o", str(run), "--levels",
+                        levels, "--threads", "2", "--quiet"] + extra, check=True)
         out[label] = run
     return pair, out
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    return generate_and_match(tmp_path_factory.mktemp("limbs"), PAIR, "obj", "4..6")
+
+
+@pytest.fixture(scope="module")
+def arms(tmp_path_factory):
+    return generate_and_match(tmp_path_factory.mktemp("arms"), ARMS, "polyline", "4..7")
 
 
 def measured(pair, run):
@@ -84,24 +94,6 @@ def test_the_leg_does_not_turn_about_its_axis(runs):
     assert min(abs(t) for t in turns_off) > 20, turns_off
     assert err_on < 0.8 * err_off, (err_on, err_off)
 
-
-@pytest.fixture(scope="module")
-def arms(tmp_path_factory):
-    vdb_match = os.environ.get("VDB_MATCH")
-    if not vdb_match:
-        pytest.fail("VDB_MATCH (the vdb_match executable) is not set")
-    root = tmp_path_factory.mktemp("arms")
-    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", ARMS], check=True,
-                   stdout=subprocess.DEVNULL)
-    pair = root / "pairs" / ARMS
-    out = {}
-    for label, extra in {"on": [], "off": ["--rigid-limb-weight", "0"]}.items():
-        run = root / label
-        subprocess.run([vdb_match, "match", str(pair / "source.polyline"),
-                        str(pair / "target_resampled.polyline"), "-o", str(run), "--levels",
-                        "4..7", "--threads", "2", "--quiet"] + extra, check=True)
-        out[label] = run
-    return pair, out
 
 
 def test_the_raised_arms_are_carried_whole_in_2d(arms):
