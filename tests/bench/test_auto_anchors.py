@@ -13,40 +13,15 @@ on benchmark pairs with a known map (bench/accuracy/make_pairs.py), levels 4..7 
   the anchors off and the body slid."""
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ACCURACY = os.path.join(HERE, "..", "..", "bench", "accuracy")
-MAKE_PAIRS = os.path.join(ACCURACY, "make_pairs.py")
-sys.path.insert(0, ACCURACY)
+from bench_pairs import generate_and_match  # tests/bench/bench_pairs.py (puts bench/accuracy on sys.path)
 from score import read_points  # noqa: E402  (bench/accuracy/score.py)
 
 PAIR = "figure_arms_horizontal"
 LEGS = "figure_legs_spread"
-
-
-def generate_and_match(root, name, variants):
-    """make_pairs.py --only name into root, then one forward match per variant (its extra
-    options) at levels 4..7; returns the pair's directory and {variant: run directory}."""
-    vdb_match = os.environ.get("VDB_MATCH")
-    if not vdb_match:
-        pytest.fail("VDB_MATCH (the vdb_match executable) is not set")
-    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", name], check=True,
-                   stdout=subprocess.DEVNULL)
-    pair = root / "pairs" / name
-    out = {}
-    for label, extra in variants.items():
-        run = root / label
-        subprocess.run([vdb_match, "match", str(pair / "source.polyline"),
-                        str(pair / "target_resampled.polyline"), "-o", str(run), "--levels", "4..7",
-                        "--threads", "1", "--quiet"] + extra, check=True)
-        out[label] = run
-    return pair, out
 
 
 @pytest.fixture(scope="module")

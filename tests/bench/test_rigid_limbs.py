@@ -14,51 +14,27 @@ the shoulder), levels 4..6 (a few seconds each):
   over all vertices falls by half."""
 
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
-HERE = os.path.dirname(os.path.abspath(__file__))
-ACCURACY = os.path.join(HERE, "..", "..", "bench", "accuracy")
-MAKE_PAIRS = os.path.join(ACCURACY, "make_pairs.py")
-sys.path.insert(0, ACCURACY)
+from bench_pairs import generate_and_match  # tests/bench/bench_pairs.py (puts bench/accuracy on sys.path)
 from score import read_points  # noqa: E402  (bench/accuracy/score.py)
 from limb_twist import twist_table  # noqa: E402  (bench/accuracy/limb_twist.py)
 
 PAIR = "animal_leg_swing"
 ARMS = "figure_arms_horizontal"
-
-
-def generate_and_match(root, name, ext, levels):
-    """make_pairs.py --only name into root, then the default and --rigid-limb-weight 0 forward
-    at levels; returns the pair's directory and {"on": run, "off": run}."""
-    vdb_match = os.environ.get("VDB_MATCH")
-    if not vdb_match:
-        pytest.fail("VDB_MATCH (the vdb_match executable) is not set")
-    subprocess.run([sys.executable, MAKE_PAIRS, str(root / "pairs"), "--only", name], check=True,
-                   stdout=subprocess.DEVNULL)
-    pair = root / "pairs" / name
-    out = {}
-    for label, extra in {"on": [], "off": ["--rigid-limb-weight", "0"]}.items():
-        run = root / label
-        subprocess.run([vdb_match, "match", str(pair / ("source." + ext)),
-                        str(pair / ("target_resampled." + ext)), "-o", str(run), "--levels",
-                        levels, "--threads", "2", "--quiet"] + extra, check=True)
-        out[label] = run
-    return pair, out
+LIMBS = {"on": [], "off": ["--rigid-limb-weight", "0"]}
 
 
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory):
-    return generate_and_match(tmp_path_factory.mktemp("limbs"), PAIR, "obj", "4..6")
+    return generate_and_match(tmp_path_factory.mktemp("limbs"), PAIR, LIMBS, "4..6", threads=2)
 
 
 @pytest.fixture(scope="module")
 def arms(tmp_path_factory):
-    return generate_and_match(tmp_path_factory.mktemp("arms"), ARMS, "polyline", "4..7")
+    return generate_and_match(tmp_path_factory.mktemp("arms"), ARMS, LIMBS, "4..7", threads=2)
 
 
 def measured(pair, run):

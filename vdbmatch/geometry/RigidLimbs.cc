@@ -159,6 +159,22 @@ principalAxis(const Surface<D>& s, const std::vector<double>& w,
     if ((tip - centre).dot(axis) < 0) axis = -axis;
 }
 
+/// The rotation by @a radians about the unit vector @a axis (2D: about the plane's normal; the
+/// axis is not used).
+template <int D>
+Mat<D>
+turnAbout(const Vec<D>& axis, double radians)
+{
+    if constexpr (D == 2) {
+        (void)axis;
+        Mat<2> r;
+        r << std::cos(radians), -std::sin(radians), std::sin(radians), std::cos(radians);
+        return r;
+    } else {
+        return Eigen::AngleAxis<Real>(radians, axis).toRotationMatrix();
+    }
+}
+
 /// The least rotation taking the unit vector @a a to the unit vector @a b (3D: about a x b;
 /// opposite vectors: about an axis normal to a).
 template <int D>
@@ -166,10 +182,7 @@ Mat<D>
 leastRotation(const Vec<D>& a, const Vec<D>& b)
 {
     if constexpr (D == 2) {
-        const double angle = std::atan2(a[0] * b[1] - a[1] * b[0], a.dot(b));
-        Mat<2> r;
-        r << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);
-        return r;
+        return turnAbout<2>(a, std::atan2(a[0] * b[1] - a[1] * b[0], a.dot(b)));
     } else {
         const double c = a.dot(b);
         Vec<3> k = a.cross(b);
@@ -185,23 +198,6 @@ leastRotation(const Vec<D>& a, const Vec<D>& b)
         K << 0, -k[2], k[1], k[2], 0, -k[0], -k[1], k[0], 0;
         const double angle = std::atan2(s, c);
         return Mat<3>::Identity() + std::sin(angle) * K + (1 - std::cos(angle)) * K * K;
-    }
-}
-
-/// The rotation by @a degrees about the unit vector @a axis (2D: about the plane's normal; the
-/// axis is not used).
-template <int D>
-Mat<D>
-turnAbout(const Vec<D>& axis, double degrees)
-{
-    const double a = degrees / DEGREES;
-    if constexpr (D == 2) {
-        (void)axis;
-        Mat<2> r;
-        r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
-        return r;
-    } else {
-        return Eigen::AngleAxis<Real>(a, axis).toRotationMatrix();
     }
 }
 
@@ -423,7 +419,8 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         std::vector<Vec<D>> ts(Rs.size());
         std::vector<double> rs(Rs.size());
         for (std::size_t start = 0; start < Rs.size(); ++start) {
-            Rs[start] = turnAbout<D>(u2, 360.0 * double(start) / double(Rs.size())) * axes;
+            Rs[start] =
+                turnAbout<D>(u2, 360.0 * double(start) / double(Rs.size()) / DEGREES) * axes;
             ts[start] = c2 - Rs[start] * c1;
             rs[start] = fit(Rs[start], ts[start]);
         }
