@@ -23,27 +23,6 @@
 using namespace vdbmatch;
 using namespace vdbmatch::test;
 
-namespace {
-
-/// A closed polygon through @a corners, each side cut in pieces of at most @a step.
-Surface<2>
-polygon(const std::vector<Vec<2>>& corners, double step)
-{
-    Surface<2> s;
-    for (std::size_t k = 0; k < corners.size(); ++k) {
-        const Vec<2> a = corners[k], b = corners[(k + 1) % corners.size()];
-        const int n = std::max(1, int(std::ceil((b - a).norm() / step)));
-        for (int i = 0; i < n; ++i)
-            s.points.push_back(a + (b - a) * (double(i) / n));
-    }
-    const int32_t m = int32_t(s.points.size());
-    for (int32_t i = 0; i < m; ++i)
-        s.elements.push_back({i, (i + 1) % m});
-    return s;
-}
-
-} // namespace
-
 TEST(InnerDistance, DistanceFromTheCentreOfADiscInEveryDirection)
 {
     const Vec<2> c(0.5, 0.5);

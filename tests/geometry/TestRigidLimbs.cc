@@ -279,23 +279,6 @@ TEST(RigidLimbs, LargeTurnsAboutTheAxisAreFound)
     }
 }
 
-/// A closed polygon's outline, its edges sampled every @a step or less (counter-clockwise).
-Surface<2>
-outline(const std::vector<Vec<2>>& corners, double step)
-{
-    Surface<2> s;
-    for (std::size_t i = 0; i < corners.size(); ++i) {
-        const Vec<2> a = corners[i], b = corners[(i + 1) % corners.size()];
-        const int n = std::max(1, int(std::ceil((b - a).norm() / step)));
-        for (int k = 0; k < n; ++k)
-            s.points.push_back(a + (b - a) * (double(k) / n));
-    }
-    const int m = int(s.points.size());
-    for (int i = 0; i < m; ++i)
-        s.elements.push_back({i, (i + 1) % m});
-    return s;
-}
-
 TEST(RigidLimbs, HookedLimbIn2D)
 {
     // An arm with its hand bent sideways at the end, swung by 90 degrees about its base, its tip
@@ -307,7 +290,7 @@ TEST(RigidLimbs, HookedLimbIn2D)
     const std::vector<Vec<2>> corners = {base + Vec<2>(0.04, 0),     base + Vec<2>(0.04, 0.3),
                                          base + Vec<2>(0.14, 0.3),   base + Vec<2>(0.14, 0.36),
                                          base + Vec<2>(-0.04, 0.36), base + Vec<2>(-0.04, 0)};
-    const Surface<2> a = outline(corners, 0.004);
+    const Surface<2> a = test::polygon(corners, 0.004);
     const double angle = 90 * M_PI / 180;
     Mat<2> R;
     R << std::cos(angle), -std::sin(angle), std::sin(angle), std::cos(angle);

@@ -1,6 +1,6 @@
 /// @file TestSurfaces.h
-/// @brief Small explicit surfaces for tests: a unit cube, a UV sphere, circles and squares, noise
-/// correlated over a few vertices, and a scratch directory per test.
+/// @brief Small explicit surfaces for tests: a unit cube, a UV sphere, circles, polygons and
+/// squares, noise correlated over a few vertices, and a scratch directory per test.
 #pragma once
 
 #include <vdbmatch/geometry/Surface.h>
@@ -134,6 +134,23 @@ addCircle(Surface<2>& s, const Vec<2>& centre, double radius, int n, bool clockw
         s.points.push_back(centre + radius * Vec<2>(std::cos(a), std::sin(a)));
         s.elements.push_back({first + k, first + (k + 1) % n});
     }
+}
+
+/// A closed polygon through @a corners, each side cut in pieces of at most @a step.
+inline Surface<2>
+polygon(const std::vector<Vec<2>>& corners, double step)
+{
+    Surface<2> s;
+    for (std::size_t k = 0; k < corners.size(); ++k) {
+        const Vec<2> a = corners[k], b = corners[(k + 1) % corners.size()];
+        const int n = std::max(1, int(std::ceil((b - a).norm() / step)));
+        for (int i = 0; i < n; ++i)
+            s.points.push_back(a + (b - a) * (double(i) / n));
+    }
+    const int32_t m = int32_t(s.points.size());
+    for (int32_t i = 0; i < m; ++i)
+        s.elements.push_back({i, (i + 1) % m});
+    return s;
 }
 
 inline Surface<2>
