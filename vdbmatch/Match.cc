@@ -378,16 +378,24 @@ minDeterminant(const SimplexLattice<D>& lattice, const NodeVectors<D>& u)
 
 namespace {
 
+/// The two shapes' noise as the anchors' tolerance follows it (Omega units; 0: not read).
+struct AnchorNoise
+{
+    double correlated = 0; ///< hypot of the shapes' correlatedNoise()
+    double lattice = 0;    ///< hypot of the shapes' lattice readings, white noise included
+};
+
 /// MatchOptions::autoLandmarks: the paired extremities of the two shapes (Omega units in,
 /// world units out), and the anchors, sought with a tolerance of at least
-/// MatchOptions::anchorNoiseFactor times @a correlated, the shapes' correlated noise (Omega units).
+/// MatchOptions::anchorNoiseFactor times @a noise.correlated; where a rigid limb is held and
+/// the anchors are sought again nearer its joint, times @a noise.lattice.
 /// With @a anchorsOnly (MatchOptions::landmarkAnchors: the caller's landmarks act instead) the
 /// paired extremities are not landmarks (used stays false): they decide whether the motion is
 /// an articulation, and so whether the anchors act, and they are the inner-distance term's.
 template <int D>
 AutoLandmarkSummary
 autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
-              const UnitBoxPlacement& placement, const MatchOptions& opts, double correlated,
+              const UnitBoxPlacement& placement, const MatchOptions& opts, const AnchorNoise& noise,
               bool anchorsOnly)
 {
     const Clock::time_point start = Clock::now();
@@ -465,7 +473,7 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     } else if (opts.autoAnchors) {
         StillAnchorOptions ao = opts.anchorOptions;
         ao.threaded = opts.threaded;
-        ao.tolerance = std::max(ao.tolerance, opts.anchorNoiseFactor * correlated);
+        ao.tolerance = std::max(ao.tolerance, opts.anchorNoiseFactor * noise.correlated);
         const StillAnchors<D> anchors = findStillAnchors<D>(unitSource, unitTarget, ao);
         out.anchorTolerance = ao.tolerance;
         out.anchorRadius = ao.radius;
@@ -516,14 +524,18 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                 out.limbTarget.push_back(wb);
             }
             // A limb swung beyond the first band drags the skin next to its joint: the anchors
-            // come nearer the joints (a smaller patch), sought again.
+            // come nearer the joints (a smaller patch), sought again, with a tolerance that
+            // follows all of the shapes' noise, white noise too (which leaves most of a scan's
+            // skin next to the joint off the source by more than the fixed tolerance).
             const double r = opts.rigidLimbAnchorRadius;
             if (!limbs.source.empty() && r > 0 && r < ao.radius) {
                 StillAnchorOptions near = ao;
                 near.radius = r;
+                near.tolerance = std::max(ao.tolerance, opts.anchorNoiseFactor * noise.lattice);
                 const StillAnchors<D> closer = findStillAnchors<D>(unitSource, unitTarget, near);
                 if (!closer.points.empty()) {
                     out.anchorRadius = r;
+                    out.anchorTolerance = near.tolerance;
                     out.anchorCoincidentShare = closer.coincidentShare();
                     setAnchors(closer.points);
                 }
@@ -801,7 +813,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
     // The length is the larger of the vertex and the lattice readings' (docs/numerics.md
     // "Correlated noise"): white vertex noise reads higher on the first, noise correlated over
     // a few vertices on the second.
-    double correlated = 0; // Omega units
+    AnchorNoise anchorNoise; // Omega units
     if (opts.hessianNoiseFactor > 0) {
         NoiseReading noise[2];
         detail::invokeBoth(
@@ -820,7 +832,8 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         sourceSampler.fields.hessianSmoothingLength = noise[0].length;
         targetSampler.fields.hessianSmoothingLength = noise[1].length;
         // The anchors' tolerance follows the noise the two shapes add up to.
-        correlated = std::hypot(correlatedNoise(noise[0]), correlatedNoise(noise[1]));
+        anchorNoise.correlated = std::hypot(correlatedNoise(noise[0]), correlatedNoise(noise[1]));
+        anchorNoise.lattice = std::hypot(noise[0].lattice, noise[1].lattice);
     }
 
     // The landmarks act at every level, automatic ones at the first autoLandmarkLevels only.
@@ -832,7 +845,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
         result.autoLandmarks.reason = "the run starts from an earlier result";
     } else if (opts.autoLandmarks && opts.sourceLandmarks.empty()) {
         result.autoLandmarks =
-            autoLandmarks(unitSource, unitTarget, placement, opts, correlated, false);
+            autoLandmarks(unitSource, unitTarget, placement, opts, anchorNoise, false);
         lastLandmarkLevel = result.autoLandmarks.lastLevel;
         opts.sourceLandmarks = result.autoLandmarks.source;
         opts.targetLandmarks = result.autoLandmarks.target;
@@ -840,7 +853,7 @@ match(const Surface<D>& source, const Surface<D>& target, const UnitBoxPlacement
                !opts.initial) {
         // The given landmarks act at every level; the extremities only decide the anchors.
         result.autoLandmarks =
-            autoLandmarks(unitSource, unitTarget, placement, opts, correlated, true);
+            autoLandmarks(unitSource, unitTarget, placement, opts, anchorNoise, true);
     }
     if (result.autoLandmarks.requested && observer.autoLandmarks)
         observer.autoLandmarks(result.autoLandmarks);

@@ -314,9 +314,11 @@ struct MatchOptions
     double rigidLimbMinMotion = 1;
     /// When a rigid limb is held, the anchors are sought again with this patch radius (Omega
     /// units), if smaller than anchorOptions.radius: a limb swung beyond the first band drags
-    /// the skin next to its joint, and smaller patches put anchors nearer the joint. >= 0; 0:
-    /// the anchors keep their radius (paper(), defaults(2)); defaults(3):
-    /// DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D.
+    /// the skin next to its joint, and smaller patches put anchors nearer the joint. They are
+    /// sought with a tolerance of at least anchorNoiseFactor times the hypotenuse of the two
+    /// shapes' whole lattice readings, white noise included (on a white-noise scan the skin next
+    /// to the joint lies off the source by more than the fixed tolerance). >= 0; 0: the anchors
+    /// keep their radius (paper(), defaults(2)); defaults(3): DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D.
     double rigidLimbAnchorRadius = 0;
     RigidLimbOptions rigidLimbOptions; ///< reach, fit and count (Omega units; minMotion is set
                                        ///< from rigidLimbMinMotion)
@@ -455,8 +457,9 @@ struct AutoLandmarkSummary
     std::vector<openvdb::Vec3d> anchors;
     std::string anchorReason;
     double anchorCoincidentShare = 0; ///< StillAnchors::coincidentShare() (both shapes)
-    /// The tolerance the anchors were sought with (Omega units; MatchOptions::anchorNoiseFactor);
-    /// 0 when they were not sought.
+    /// The tolerance the anchors were sought with (Omega units; MatchOptions::anchorNoiseFactor,
+    /// and for the nearer anchors of a held limb MatchOptions::rigidLimbAnchorRadius); 0 when
+    /// they were not sought.
     double anchorTolerance = 0;
     /// Rigid limbs (MatchOptions::rigidLimbWeight > 0, with the anchors): what the fit found of
     /// each moving limb (Omega units, degrees), and the points held at every level with their

@@ -618,7 +618,9 @@ matchOptionTable()
          "of each shape's lattice noise reading (--lattice-noise-smoothing) that its vertex "
          "noise does not account for as white noise. A scan whose noise is correlated over a "
          "few vertices then still coincides with the other shape where nothing moved; white "
-         "noise and noise-free shapes keep --anchor-tolerance. Needs the lattice reading; "
+         "noise and noise-free shapes keep --anchor-tolerance. The nearer anchors of a held "
+         "rigid limb (--rigid-limb-anchor-radius) take K times the whole lattice reading, white "
+         "noise included. Needs the lattice reading; "
          ">= 0, 0: off (default " +
              formatNumber(DEFAULT_ANCHOR_NOISE_FACTOR_3D) +
              " in 3D, 0 in 2D; --preset paper: 0). report.json \"autoLandmarks\" gives the \"anchorTolerance\" "
@@ -648,7 +650,9 @@ matchOptionTable()
          }},
         {"--rigid-limb-anchor-radius", "X", "Landmarks (an addition to the paper)",
          "when a rigid limb is held, the anchors are sought again with this --anchor-radius, if "
-         "smaller, so that they come nearer the joints, >= 0; 0: the anchors keep theirs "
+         "smaller, so that they come nearer the joints, and with a tolerance of at least "
+         "--anchor-noise-tolerance times the shapes' whole lattice noise reading, >= 0; 0: the "
+         "anchors keep theirs "
          "(default " +
              both(DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D, 0.0) + "; --preset paper: 0)",
          [](O& o, const std::string& v) {
