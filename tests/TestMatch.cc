@@ -259,6 +259,20 @@ starPose()
     return {rest, oneArm};
 }
 
+/// 2D match() options that read the shapes' noise as the 3D defaults do (the lattice reading,
+/// the anchors' noise factor), at level 4 without descent steps: the anchors only.
+MatchOptions
+noiseReadingOptions()
+{
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.hessianLatticeNoiseFactor = LATTICE_NOISE_SMOOTHING_FACTOR_3D;
+    opts.anchorNoiseFactor = DEFAULT_ANCHOR_NOISE_FACTOR_3D;
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 4;
+    opts.multiscale.descent.maxIterations = 0; // the anchors only
+    return opts;
+}
+
 } // namespace
 
 TEST(Match, CircleToEllipse2D)
@@ -450,6 +464,34 @@ TEST(Match, NoiseBendingLowersTheBendingWeightWhereTheHessianIsSmoothed)
     const MatchResult<2> scaled = match<2>(circle, scan, placement, folded);
     EXPECT_EQ(scaled.levels[0].bendingFactor, 1.0);
     EXPECT_TRUE(weighted.displacement == scaled.displacement);
+}
+
+TEST(Match, IterationCoarseningRaisesTheLimitOfCoarseLevels)
+{
+    // MultiscaleOptions::iterationCoarsening (--iteration-coarsening, an addition; 1 by
+    // default: one limit, as the paper). With a limit of 3 iterations and the factor 2, the
+    // circle onto the ellipse at levels 4..5 runs 6 at level 4 and 3 at level 5, each stopped by
+    // its limit; with 1, both 3.
+    EXPECT_EQ(MatchOptions::defaults(3).multiscale.iterationCoarsening, 1.0);
+    EXPECT_EQ(MatchOptions::defaults(2).multiscale.iterationCoarsening, 1.0);
+    EXPECT_EQ(MatchOptions::paper(3).multiscale.iterationCoarsening, 1.0);
+    EXPECT_EQ(MatchOptions::paper(2).multiscale.iterationCoarsening, 1.0);
+    const Surface<2> circle = worldCircle(), ellipse = worldEllipse();
+    for (const bool one : {false, true}) {
+        MatchOptions opts = MatchOptions::defaults(2);
+        opts.multiscale.iterationCoarsening = one ? 1.0 : 2.0;
+        opts.multiscale.minLevel = 4;
+        opts.multiscale.maxLevel = 5;
+        opts.multiscale.descent.maxIterations = 3;
+        const UnitBoxPlacement placement = placeInUnitBox(circle, ellipse, opts.margin);
+        const MatchResult<2> r = match<2>(circle, ellipse, placement, opts);
+        ASSERT_EQ(r.levels.size(), 2u);
+        const int expected[2] = {one ? 3 : 6, 3};
+        for (int k = 0; k < 2; ++k) {
+            EXPECT_EQ(r.levels[std::size_t(k)].report.status, solver::Status::MaxIterations);
+            EXPECT_EQ(r.levels[std::size_t(k)].report.iterations, expected[k]);
+        }
+    }
 }
 
 TEST(Match, HeavierMetricIs2DDefaultAndChangesThePathNotTheEnergy)
@@ -1009,12 +1051,7 @@ TEST(Match, AnchorToleranceFollowsCorrelatedNoise)
     EXPECT_EQ(MatchOptions::paper(3).anchorNoiseFactor, 0.0);
     const auto [rest, oneArm] = starPose();
     const Surface<2> a = starOutline(rest, 96), clean = starOutline(oneArm, 96);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.hessianLatticeNoiseFactor = LATTICE_NOISE_SMOOTHING_FACTOR_3D;
-    opts.anchorNoiseFactor = DEFAULT_ANCHOR_NOISE_FACTOR_3D;
-    opts.multiscale.minLevel = 4;
-    opts.multiscale.maxLevel = 4;
-    opts.multiscale.descent.maxIterations = 0; // the anchors only
+    const MatchOptions opts = noiseReadingOptions();
     const UnitBoxPlacement placement = placeInUnitBox(a, clean, opts.margin);
     // Radial noise of 0.4% of the unit box correlated over about 4 points (spacing ~0.004);
     // the arms take its normal part.
@@ -1068,13 +1105,8 @@ TEST(Match, NearerAnchorsFollowWhiteNoise)
 {
     const auto [rest, oneArm] = starPose();
     const Surface<2> a = starOutline(rest, 96), clean = starOutline(oneArm, 96);
-    MatchOptions opts = MatchOptions::defaults(2);
-    opts.hessianLatticeNoiseFactor = LATTICE_NOISE_SMOOTHING_FACTOR_3D;
-    opts.anchorNoiseFactor = DEFAULT_ANCHOR_NOISE_FACTOR_3D;
+    MatchOptions opts = noiseReadingOptions();
     opts.rigidLimbAnchorRadius = DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D;
-    opts.multiscale.minLevel = 4;
-    opts.multiscale.maxLevel = 4;
-    opts.multiscale.descent.maxIterations = 0; // the anchors only
     const UnitBoxPlacement placement = placeInUnitBox(a, clean, opts.margin);
     // Radial white noise of 0.2% of the unit box.
     const Surface<2> scan =

@@ -102,6 +102,7 @@ def match(
     surface_levels: int | None = None,
     surface_from_level: int | None = None,
     tolerance_coarsening: float | None = None,
+    iteration_coarsening: float | None = None,
     gradient_tolerance: float | None = None,
     metric_tau: float | None = None,
     optimizer: str | None = None,

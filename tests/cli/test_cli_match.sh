@@ -306,6 +306,7 @@ check noise-smoothing-negative 1 '' '--noise-smoothing must be a finite number >
 check lattice-noise-smoothing-negative 1 '' '--lattice-noise-smoothing must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --lattice-noise-smoothing -1 --quiet
 check noise-bending-negative 1 '' '--noise-bending must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --noise-bending -1 --quiet
 check anchor-noise-tolerance-negative 1 '' '--anchor-noise-tolerance must be a finite number >= 0' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --anchor-noise-tolerance -1 --quiet
+check iteration-coarsening-below-one 1 '' '--iteration-coarsening must be a finite number >= 1' -- "$SPHERE" "$ELLIPSOID" -o "$SCRATCH/o" --iteration-coarsening 0.5 --quiet
 # A report of a version before an addition reproduces its run without it:
 # old_report NAME KEY ASSERTION drops parameters.KEY from the 3D report, reruns it with --config
 # and checks ASSERTION (Python, with r the new report and p its parameters).

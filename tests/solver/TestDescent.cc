@@ -777,6 +777,46 @@ TEST(Descent, SettleTestEndsALevelOnRelativeProgress)
     EXPECT_STREQ(toString(ConvergenceTest::Settled), "settled");
 }
 
+TEST(Descent, IterationCoarseningRaisesTheLimitBelowTheFinestLevel)
+{
+    // MultiscaleOptions::iterationCoarsening (match()'s default 2, an addition to the paper):
+    // level l may run maxIterations * F^(maxLevel - l) iterations.
+    MultiscaleOptions opts = MultiscaleOptions::defaults(2);
+    opts.minLevel = 4;
+    opts.maxLevel = 8;
+    opts.descent.maxIterations = 500;
+    EXPECT_EQ(levelIterationLimit(opts, 8), 500); // F = 1, the paper: one limit
+    EXPECT_EQ(levelIterationLimit(opts, 4), 500);
+    opts.iterationCoarsening = 2;
+    EXPECT_EQ(levelIterationLimit(opts, 8), 500);
+    EXPECT_EQ(levelIterationLimit(opts, 7), 1000);
+    EXPECT_EQ(levelIterationLimit(opts, 4), 8000);
+    opts.iterationCoarsening = 1e6;
+    EXPECT_EQ(levelIterationLimit(opts, 4), MAX_LEVEL_ITERATIONS);
+    opts.descent.maxIterations = 0; // no descent stays no descent
+    EXPECT_EQ(levelIterationLimit(opts, 4), 0);
+
+    // A run of the circle onto the ellipse that no level finishes in 2 iterations: each level
+    // stops at its own limit, 8, 4, 2.
+    opts.minLevel = 4;
+    opts.maxLevel = 6;
+    opts.descent.maxIterations = 2;
+    opts.iterationCoarsening = 2;
+    Problem<2> problem(opts.energy);
+    const MultiscaleResult<2> result = MultiscaleDriver<2>(opts).run(problem.denseLevels());
+    ASSERT_EQ(result.reports.size(), 3u);
+    const int expected[3] = {8, 4, 2};
+    for (int k = 0; k < 3; ++k) {
+        EXPECT_EQ(result.reports[std::size_t(k)].status, Status::MaxIterations)
+            << "level " << 4 + k;
+        EXPECT_EQ(result.reports[std::size_t(k)].iterations, expected[k]) << "level " << 4 + k;
+    }
+    opts.iterationCoarsening = 0.5;
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+    opts.iterationCoarsening = std::numeric_limits<Real>::infinity();
+    EXPECT_THROW(opts.validate(), openvdb::ValueError);
+}
+
 TEST(Descent, RejectsInvalidSettleTolerance)
 {
     DescentOptions opts;

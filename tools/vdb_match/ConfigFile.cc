@@ -49,6 +49,7 @@ configKeys()
         {"energyTolerance", "--energy-tolerance"},
         {"settleTolerance", "--settle-tolerance"},
         {"toleranceCoarsening", "--tolerance-coarsening"},
+        {"iterationCoarsening", "--iteration-coarsening"},
         {"surfaceTolerance", "--surface-tolerance"},
         {"surfaceLevels", "--surface-levels"},
         {"surfaceFromLevel", "--surface-from-level"},
@@ -214,6 +215,11 @@ parseConfig(const std::string& text, const std::string& path)
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
         !params.contains("anchorNoiseTolerance")) {
         settings.push_back({"anchorNoiseTolerance", "--anchor-noise-tolerance", "0"});
+    }
+    // ... and one before the iteration limit per level (no iterationCoarsening) had one limit.
+    if (doc.contains("parameters") && params.contains("toleranceCoarsening") &&
+        !params.contains("iterationCoarsening")) {
+        settings.push_back({"iterationCoarsening", "--iteration-coarsening", "1"});
     }
     // ... and one before the noise-adaptive bending weight (no noiseBending) kept c_bend.
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&

@@ -86,6 +86,7 @@ struct MatchCliOptions
     double energyTolerance = MatchOptions::defaults(3).multiscale.descent.energyTolerance;
     double settleTolerance = MatchOptions::defaults(3).multiscale.descent.settleTolerance;
     double toleranceCoarsening = MatchOptions::defaults(3).multiscale.toleranceCoarsening;
+    double iterationCoarsening = MatchOptions::defaults(3).multiscale.iterationCoarsening;
     std::optional<double> surfaceTolerance; ///< default per dimension (MatchOptions::defaults)
     int surfaceLevels = MatchOptions::defaults(3).multiscale.surfaceLevels;
     int surfaceFromLevel = MatchOptions::defaults(3).multiscale.surfaceFromLevel;
@@ -756,6 +757,14 @@ matchOptionTable()
          "level l divides the energy, settle and surface tolerances by F^(last level - l): coarse levels, "
          "where iterations are cheap, converge further (default " + formatNumber(d.toleranceCoarsening) + ")",
          [](O& o, const std::string& v) { o.toleranceCoarsening = parseDouble("--tolerance-coarsening", v); }},
+        {"--iteration-coarsening", "F", "Descent",
+         "an addition to the paper: level l runs at most --max-iterations times F^(last level - "
+         "l) iterations, so that coarse levels, whose iterations cost a fraction of the finest "
+         "one's, are not stopped before they converge, >= 1 (default 1: one limit; "
+         "docs/numerics.md \"Iteration limit per level\")",
+         [](O& o, const std::string& v) {
+             o.iterationCoarsening = parseDouble("--iteration-coarsening", v);
+         }},
         {"--gradient-tolerance", "X", "Descent",
          "... or when the H1 gradient norm fell below X times its initial value (default " +
              formatNumber(d.gradientTolerance) + ")",
@@ -899,6 +908,8 @@ parseMatchOptions(int argc, const char* const* argv, int first)
     if (o.progressEvery < 1) throw UsageError("--progress-every must be >= 1");
     if (o.threads < 0) throw UsageError("--threads must be >= 0");
     if (o.hessianSmoothing < 0) throw UsageError("--hessian-smoothing must be >= 0");
+    if (!(o.iterationCoarsening >= 1 && std::isfinite(o.iterationCoarsening)))
+        throw UsageError("--iteration-coarsening must be a finite number >= 1");
     if (o.noiseSmoothing && !(*o.noiseSmoothing >= 0 && std::isfinite(*o.noiseSmoothing)))
         throw UsageError("--noise-smoothing must be a finite number >= 0");
     if (o.latticeNoiseSmoothing &&
@@ -1192,6 +1203,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"surfaceLevels", opts.multiscale.surfaceLevels},
              {"surfaceFromLevel", opts.multiscale.surfaceFromLevel},
              {"toleranceCoarsening", opts.multiscale.toleranceCoarsening},
+             {"iterationCoarsening", opts.multiscale.iterationCoarsening},
              {"relativeGradientTolerance", descent.relativeGradientTolerance},
              {"landmarkWeight", opts.landmarkWeight},
              {"autoLandmarks", opts.autoLandmarks ? "on" : "off"},
@@ -1424,6 +1436,7 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     opts.multiscale.descent.energyTolerance = o.energyTolerance;
     opts.multiscale.descent.settleTolerance = o.settleTolerance;
     opts.multiscale.toleranceCoarsening = o.toleranceCoarsening;
+    opts.multiscale.iterationCoarsening = o.iterationCoarsening;
     if (o.surfaceTolerance) opts.multiscale.surfaceTolerance = *o.surfaceTolerance;
     opts.multiscale.surfaceLevels = o.surfaceLevels;
     opts.multiscale.surfaceFromLevel = o.surfaceFromLevel;

@@ -6,6 +6,7 @@
 
 #include <openvdb/Exceptions.h>
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 
@@ -22,6 +23,15 @@ MultiscaleOptions::defaults(int dim)
     return opts;
 }
 
+int
+levelIterationLimit(const MultiscaleOptions& opts, int l)
+{
+    const int base = opts.descent.maxIterations;
+    const double limit =
+        std::round(double(base) * std::pow(double(opts.iterationCoarsening), opts.maxLevel - l));
+    return std::max(base, int(std::min(limit, double(MAX_LEVEL_ITERATIONS))));
+}
+
 void
 MultiscaleOptions::validate() const
 {
@@ -36,6 +46,10 @@ MultiscaleOptions::validate() const
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: toleranceCoarsening must be finite and >= 1, got "
                           << toleranceCoarsening);
+    if (!(iterationCoarsening >= 1) || !std::isfinite(iterationCoarsening))
+        OPENVDB_THROW(openvdb::ValueError,
+                      "MultiscaleOptions: iterationCoarsening must be finite and >= 1, got "
+                          << iterationCoarsening);
     if (!(surfaceTolerance >= 0) || !std::isfinite(surfaceTolerance))
         OPENVDB_THROW(openvdb::ValueError,
                       "MultiscaleOptions: surfaceTolerance must be finite and >= 0, got "
@@ -168,6 +182,7 @@ MultiscaleDriver<D>::run(const ContextLevelBuilder<D>& levels,
         const Real tighten = std::pow(mOpts.toleranceCoarsening, mOpts.maxLevel - l);
         levelDescent.settleTolerance /= tighten;
         levelDescent.energyTolerance /= tighten;
+        levelDescent.maxIterations = levelIterationLimit(mOpts, l);
         levelDescent.surfaceTolerance =
             mOpts.surfaceTestAt(l) ? mOpts.surfaceTolerance * in.lattice->h() / tighten : 0.0;
         solver::Descent<D> descent(energy, metric, levelDescent);

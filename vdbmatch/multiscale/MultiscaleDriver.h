@@ -82,6 +82,9 @@ template <int D> using InitialGuess = std::function<NodeVectors<D>(const Simplex
 /// Signature: void(const solver::Report& report).
 using LevelObserver = std::function<void(const solver::Report&)>;
 
+/// Most iterations MultiscaleOptions::iterationCoarsening gives one level.
+constexpr int MAX_LEVEL_ITERATIONS = 1000000;
+
 struct MultiscaleOptions
 {
     int minLevel = 4; ///< lmin (tab:parameters: 4)
@@ -97,6 +100,12 @@ struct MultiscaleOptions
     /// levels, where iterations are cheap, converge further than the finest one (>= 1; 1: the
     /// same everywhere).
     Real toleranceCoarsening = 1;
+    /// Cascadic iteration limit: level l runs at most descent.maxIterations *
+    /// iterationCoarsening^(maxLevel - l) iterations (rounded, at most MAX_LEVEL_ITERATIONS), so
+    /// that a coarse level, whose iterations cost a fraction of the finest one's, is not stopped
+    /// before it converges: what it leaves unconverged the finer levels pay for at their cost,
+    /// or keep (>= 1; 1: the same limit everywhere, the paper).
+    Real iterationCoarsening = 1;
     /// Surface test (DescentOptions::surfaceTolerance), in cells, at the last surfaceLevels
     /// levels: level l ends when phi on Level::surfacePoints moved by less than
     /// surfaceTolerance * h_l / toleranceCoarsening^(maxLevel - l) (path length of the mean
@@ -155,6 +164,11 @@ struct MultiscaleOptions
     /// Throws openvdb::ValueError naming the first invalid field.
     void validate() const;
 };
+
+/// The iteration limit of level @a l: opts.descent.maxIterations *
+/// opts.iterationCoarsening^(opts.maxLevel - l), rounded, at most MAX_LEVEL_ITERATIONS (and not
+/// below opts.descent.maxIterations).
+int levelIterationLimit(const MultiscaleOptions& opts, int l);
 
 template <int D> struct MultiscaleResult
 {
