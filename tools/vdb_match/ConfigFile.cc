@@ -216,11 +216,6 @@ parseConfig(const std::string& text, const std::string& path)
         !params.contains("anchorNoiseTolerance")) {
         settings.push_back({"anchorNoiseTolerance", "--anchor-noise-tolerance", "0"});
     }
-    // ... and one before the iteration limit per level (no iterationCoarsening) had one limit.
-    if (doc.contains("parameters") && params.contains("toleranceCoarsening") &&
-        !params.contains("iterationCoarsening")) {
-        settings.push_back({"iterationCoarsening", "--iteration-coarsening", "1"});
-    }
     // ... and one before the noise-adaptive bending weight (no noiseBending) kept c_bend.
     if (doc.contains("parameters") && params.contains("hessianSmoothing") &&
         !params.contains("noiseBending")) {
