@@ -11,10 +11,11 @@ point, the farthest (1 - trim) of the pairs left out). Writes every EVERY-th seg
 M1 and its image under that motion, for `vdb_match match --landmarks A.csv B.csv`.
 
 Usage: segment_fit.py SOURCE.polyline TARGET.polyline --lo LO --hi HI --out-source A.csv
-           --out-target B.csv [--sides +1,-1] [--every N] [--iterations N] [--trim F]
+           --out-target B.csv [--sides +1,-1] [--every N] [--iterations N] [--trim F] [--hop H]
+  --hop H   measure s over chords joining each vertex to the next H (default 1: the arc length)
 Prints per side the fitted angle (degrees, counter-clockwise) and the mean distance of the kept
 pairs (world units). Arc length is the length along the outline: on a noisy scan it runs longer
-than on the shape it samples. Exit status 0, or 1 with a message.
+than on the shape it samples (--hop 3 measures it over chords, as the rigid limbs do). Exit status 0, or 1 with a message.
 """
 import argparse
 import sys
@@ -32,15 +33,24 @@ def read_polyline(path):
     return np.array(pts)
 
 
-def arc_length_from(curve, i0):
-    """Arc length along the closed curve from vertex i0, the shorter way round."""
-    seg = np.linalg.norm(np.roll(curve, -1, 0) - curve, axis=1)
+def arc_length_from(curve, i0, hop=1):
+    """Length along the closed curve from vertex i0, the shorter way round: with hop 1 the arc
+    length; with hop H the shortest path over chords joining each vertex to the next H (as the
+    rigid limbs' geodesics, RigidLimbs.h: on a noisy scan the arc length adds up its zigzag)."""
     n = len(curve)
-    fwd, bwd = np.zeros(n), np.zeros(n)
-    for k in range(1, n):
-        fwd[(i0 + k) % n] = fwd[(i0 + k - 1) % n] + seg[(i0 + k - 1) % n]
-        bwd[(i0 - k) % n] = bwd[(i0 - k + 1) % n] + seg[(i0 - k) % n]
-    return np.minimum(fwd, bwd)
+    out = []
+    for sign in (+1, -1):
+        d = np.full(n, np.inf)
+        d[i0] = 0.0
+        for k in range(n):
+            i = (i0 + sign * k) % n
+            for h in range(1, hop + 1):
+                if k + h >= n:
+                    break
+                j = (i0 + sign * (k + h)) % n
+                d[j] = min(d[j], d[i] + np.linalg.norm(curve[j] - curve[i]))
+        out.append(d)
+    return np.minimum(out[0], out[1])
 
 
 def closest(p, q):
@@ -78,10 +88,12 @@ def main():
     ap.add_argument("--every", type=int, default=4)
     ap.add_argument("--iterations", type=int, default=30)
     ap.add_argument("--trim", type=float, default=0.9)
+    ap.add_argument("--hop", type=int, default=1)
     a = ap.parse_args()
-    if not (0 <= a.lo < a.hi) or a.every < 1 or a.iterations < 1 or not (0 < a.trim <= 1):
+    if (not (0 <= a.lo < a.hi) or a.every < 1 or a.iterations < 1 or not (0 < a.trim <= 1)
+            or a.hop < 1):
         sys.exit("segment_fit.py: need 0 <= --lo < --hi, --every >= 1, --iterations >= 1, "
-                 "0 < --trim <= 1")
+                 "0 < --trim <= 1, --hop >= 1")
     try:
         s_pts, t_pts = read_polyline(a.source), read_polyline(a.target)
         sides = [float(v) for v in a.sides.split(",")]
@@ -96,7 +108,7 @@ def main():
             on = np.where(c[:, 0] * side > 0)[0]
             if len(on) == 0:
                 sys.exit("segment_fit.py: no vertex with x of sign %+d" % side)
-            g = arc_length_from(c, on[c[on, 1].argmin()])
+            g = arc_length_from(c, on[c[on, 1].argmin()], a.hop)
             masks.append((g >= a.lo) & (g < a.hi) & (c[:, 0] * side > 0))
         ms, mt = masks
         if ms.sum() < 3 or mt.sum() < 3:

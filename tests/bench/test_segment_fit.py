@@ -61,3 +61,24 @@ def test_bad_input_is_refused(tmp_path):
     assert r.returncode == 1 and "the segment has 0 and 0 vertices" in r.stderr
     r = run(tmp_path / "none.polyline", *base[1:], "--lo", 0, "--hi", 1)
     assert r.returncode == 1
+
+
+def test_chords_measure_a_noisy_outline_as_its_shape(tmp_path):
+    """--hop 3 measures s over chords: on a noisy copy of the ellipse the same band then holds
+    about as many vertices as on the clean one, while the arc length (--hop 1) shrinks it."""
+    src, _ = ellipse(400, 0.0, 0.0)
+    rng = np.random.default_rng(1)
+    noisy = src + rng.normal(0.0, 0.004, src.shape)
+    write(tmp_path / "a.polyline", src)
+    write(tmp_path / "b.polyline", noisy)
+    counts = {}
+    for hop in (1, 3):
+        r = run(tmp_path / "a.polyline", tmp_path / "b.polyline", "--lo", 0.5, "--hi", 1.5,
+                "--sides", "+1", "--hop", hop, "--out-source", tmp_path / "x.csv",
+                "--out-target", tmp_path / "y.csv")
+        assert r.returncode == 0, r.stderr
+        n1, n2 = (int(v) for v in r.stdout.split(": ")[1].split(" vertices")[0].split(" and "))
+        counts[hop] = (n1, n2)
+    clean = counts[3][0]
+    assert abs(counts[3][1] - clean) < abs(counts[1][1] - clean)
+    assert abs(counts[3][1] - clean) <= 0.1 * clean
