@@ -3,34 +3,29 @@
 
 A measurement prototype (docs/results.md, "True correspondences on the two 2D motions left"):
 the rigid limbs (vdbmatch/geometry/RigidLimbs.h) fit a limb from its tip; this fits a segment
-further in, e.g. a thigh between the knee and the hip. On each closed polyline the arc length s
-from the tip (the lowest vertex on one side of x = 0, as a foot; or the vertex nearest --tip),
-the segment the vertices of that side with LO <= s < HI (world units), and the rigid motion
-that carries M1's segment onto M2's by trimmed closest points made both ways at once (point to
-point, the farthest (1 - trim) of the pairs left out). Writes every EVERY-th segment vertex of
-M1 and its image under that motion, for `vdb_match match --landmarks A.csv B.csv`.
+further in, e.g. a thigh between the knee and the hip. On each closed polyline: the arc length
+s from the tip (the lowest vertex on one side of x = 0, as a foot); the segment, the vertices of
+that side with LO <= s < HI (world units); and the rigid motion that carries M1's segment onto
+M2's by trimmed closest points made both ways at once (point to point, the farthest (1 - trim)
+of the pairs left out). Writes every EVERY-th segment vertex of M1 and its image under that
+motion, for `vdb_match match --landmarks A.csv B.csv`.
 
 Usage: segment_fit.py SOURCE.polyline TARGET.polyline --lo LO --hi HI --out-source A.csv
            --out-target B.csv [--sides +1,-1] [--every N] [--iterations N] [--trim F] [--hop H]
   --hop H   measure s over chords joining each vertex to the next H (default 1: the arc length)
 Prints per side the fitted angle (degrees, counter-clockwise) and the mean distance of the kept
 pairs (world units). Arc length is the length along the outline: on a noisy scan it runs longer
-than on the shape it samples (--hop 3 measures it over chords, as the rigid limbs do). Exit status 0, or 1 with a message.
+than on the shape it samples (--hop 3 measures it over chords, as the rigid limbs do).
+Exit status 0, or 1 with a message.
 """
 import argparse
+import os
 import sys
 
 import numpy as np
 
-
-def read_polyline(path):
-    pts = []
-    with open(path) as f:
-        for line in f:
-            s = line.split()
-            if s and not s[0].startswith("#"):
-                pts.append([float(s[0]), float(s[1])])
-    return np.array(pts)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from score import read_points  # noqa: E402  (the benchmark's one reader of vertex files)
 
 
 def arc_length_from(curve, i0, hop=1):
@@ -61,17 +56,17 @@ def closest(p, q):
 def fit_rigid(a, b, iterations=30, trim=0.9):
     """R, t carrying the points a onto the points b, and the mean distance of the kept pairs."""
     rot, t = np.eye(2), b.mean(0) - a.mean(0)
-    for _ in range(iterations + 1):
+    for it in range(iterations + 1):
         ja = closest(a @ rot.T + t, b)
         jb = closest((b - t) @ rot, a)
         src, dst = np.vstack([a, a[jb]]), np.vstack([b[ja], b])
         d = np.linalg.norm(src @ rot.T + t - dst, axis=1)
         keep = d <= np.quantile(d, trim)
-        if _ == iterations:
+        if it == iterations:
             return rot, t, float(d[keep].mean())
         s, q = src[keep], dst[keep]
         cs, cq = s.mean(0), q.mean(0)
-        u, _s, vt = np.linalg.svd((s - cs).T @ (q - cq))
+        u, _, vt = np.linalg.svd((s - cs).T @ (q - cq))
         rot = vt.T @ np.diag([1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
         t = cq - rot @ cs
 
@@ -95,10 +90,13 @@ def main():
         sys.exit("segment_fit.py: need 0 <= --lo < --hi, --every >= 1, --iterations >= 1, "
                  "0 < --trim <= 1, --hop >= 1")
     try:
-        s_pts, t_pts = read_polyline(a.source), read_polyline(a.target)
+        s_pts, t_pts = read_points(a.source, 2), read_points(a.target, 2)
         sides = [float(v) for v in a.sides.split(",")]
     except (OSError, ValueError, IndexError) as e:
         sys.exit("segment_fit.py: %s" % e)
+    for path, c in ((a.source, s_pts), (a.target, t_pts)):
+        if c.ndim != 2 or len(c) < 3 or c.shape[1] != 2:
+            sys.exit("segment_fit.py: %s: not a closed polyline of at least 3 points" % path)
     out_s, out_t = [], []
     for side in sides:
         if side not in (1.0, -1.0):

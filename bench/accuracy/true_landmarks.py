@@ -16,26 +16,14 @@ Usage: true_landmarks.py PAIR_DIR --out-source A.csv --out-target B.csv
 Prints how many pairs it wrote. Exit status 0, or 1 with a message.
 """
 import argparse
+import json
 import os
 import sys
 
 import numpy as np
 
-
-def read_points(path, dim):
-    """Vertices of a .polyline (x y lines) or .obj (v lines) file."""
-    pts = []
-    with open(path) as f:
-        for line in f:
-            s = line.split()
-            if not s or s[0].startswith("#"):
-                continue
-            if path.endswith(".obj"):
-                if s[0] == "v":
-                    pts.append([float(t) for t in s[1:1 + dim]])
-            else:
-                pts.append([float(t) for t in s[:dim]])
-    return np.array(pts)
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from score import read_points  # noqa: E402  (the benchmark's one reader of vertex files)
 
 
 def main():
@@ -48,7 +36,6 @@ def main():
     ap.add_argument("--every", type=int, default=8)
     a = ap.parse_args()
     try:
-        import json
         meta = json.load(open(os.path.join(a.pair, "pair.json")))
         dim = int(meta["dimension"])
         ext = "obj" if dim == 3 else "polyline"

@@ -60,7 +60,10 @@ def test_bad_input_is_refused(tmp_path):
     r = run(*base, "--lo", 50, "--hi", 60, "--sides", "+1")
     assert r.returncode == 1 and "the segment has 0 and 0 vertices" in r.stderr
     r = run(tmp_path / "none.polyline", *base[1:], "--lo", 0, "--hi", 1)
-    assert r.returncode == 1
+    assert r.returncode == 1 and "segment_fit.py:" in r.stderr
+    (tmp_path / "empty.polyline").write_text("# no points\n")
+    r = run(tmp_path / "empty.polyline", *base[1:], "--lo", 0, "--hi", 1)
+    assert r.returncode == 1 and "not a closed polyline of at least 3 points" in r.stderr
 
 
 def test_chords_measure_a_noisy_outline_as_its_shape(tmp_path):
