@@ -6,7 +6,8 @@
 /// differently sampled, not quite rigid shapes; a turn about the limb's own axis, which a flattened
 /// limb lets the fit see, is removed from the map and reported; a limb bent at a second joint is
 /// not rigid and is left out; tips that did not move, or no still point, give no limb; the thread
-/// count does not change the result.
+/// count does not change the result; the thigh above a bent knee whose foot stayed (a squat) is
+/// held as a segment, and only for a tip that stayed and a segment that turned.
 
 #include "support/TestSurfaces.h"
 
@@ -351,4 +352,129 @@ TEST(RigidLimbs, SwungStadiumIn2D)
     EXPECT_NEAR(limbs.limbs[0].angle, 60.0, 0.5);
     for (std::size_t k = 0; k < limbs.source.size(); ++k)
         EXPECT_LT((limbs.target[k] - (R * (limbs.source[k] - base) + base)).norm(), 2e-3) << k;
+}
+
+namespace {
+
+/// A 2D body with one leg, the leg bent as in a squat: the thigh (hip to knee) turned out by
+/// `thigh` degrees about the hip, the shin back by `shin` degrees about the moved knee, so that
+/// the foot nearly stays. Returns the two outlines, the foot's tip on each and the still points.
+struct Squat
+{
+    Surface<2> source, target;
+    Vec<2> tip1, tip2;
+    std::vector<Vec<2>> still;
+    Mat<2> thighTurn;
+    Vec<2> hip;
+};
+
+Mat<2>
+turn2(double degrees)
+{
+    const double a = degrees * M_PI / 180;
+    Mat<2> r;
+    r << std::cos(a), -std::sin(a), std::sin(a), std::cos(a);
+    return r;
+}
+
+Squat
+squat(double thigh, double shin)
+{
+    Squat s;
+    s.hip = Vec<2>(0.5, 0.6);
+    const Vec<2> knee(0.5, 0.4);
+    const std::vector<Vec<2>> corners = {Vec<2>(0.46, 0.2), Vec<2>(0.54, 0.2), Vec<2>(0.54, 0.6),
+                                         Vec<2>(0.7, 0.6),  Vec<2>(0.7, 0.8),  Vec<2>(0.3, 0.8),
+                                         Vec<2>(0.3, 0.6),  Vec<2>(0.46, 0.6)};
+    s.source = test::polygon(corners, 0.004);
+    s.thighTurn = turn2(thigh);
+    const Mat<2> S = turn2(-shin);
+    const Vec<2> movedKnee = s.thighTurn * (knee - s.hip) + s.hip;
+    const auto pose = [&](const Vec<2>& p) -> Vec<2> {
+        if (p[1] >= 0.6 - 1e-9) return p;                              // the body stays
+        if (p[1] >= knee[1]) return s.thighTurn * (p - s.hip) + s.hip; // the thigh
+        return S * (s.thighTurn * (p - knee)) + movedKnee;             // the shin
+    };
+    s.target = s.source;
+    for (Vec<2>& p : s.target.points)
+        p = pose(p);
+    s.tip1 = Vec<2>(0.5, 0.2);
+    s.tip2 = pose(s.tip1);
+    s.still = {Vec<2>(0.44, 0.6), Vec<2>(0.56, 0.6), Vec<2>(0.5, 0.8)};
+    return s;
+}
+
+} // namespace
+
+TEST(RigidLimbs, SquatHoldsTheThighOfAPlantedFoot)
+{
+    // Thigh out 20 degrees, shin back 40: the foot moves by 0.024, within the anchors' radius,
+    // so the leg is no limb from its tip; the segment next to the hip is the thigh, turned 20
+    // degrees about the hip, and its points go where the thigh's turn takes them, up to a
+    // slide along the thigh: a straight bar fits itself slid along its axis, and where the
+    // band ends on each shape decides the slide (the squat shortens the line from the foot to
+    // the hip by 6%, so the bands end 0.01 apart; 2.5 vertex spacings here).
+    const Squat s = squat(20, 40);
+    ASSERT_LT((s.tip2 - s.tip1).norm(), RigidLimbOptions().segmentMaxTipMotion);
+    RigidLimbOptions o;
+    o.minMotion = 0.125; // the first band: the foot did not move
+    const RigidLimbs<2> limbs =
+        findRigidLimbs<2>(s.source, s.target, {s.tip1}, {s.tip2}, s.still, o);
+    ASSERT_EQ(limbs.limbs.size(), 1u);
+    const RigidLimb<2>& l = limbs.limbs[0];
+    EXPECT_TRUE(l.segment);
+    ASSERT_TRUE(l.used) << l.reason;
+    EXPECT_NEAR(l.angle, 20.0, 1.5);
+    EXPECT_LT(l.residual, 3e-3);
+    ASSERT_EQ(limbs.source.size(), o.count);
+    for (std::size_t k = 0; k < limbs.source.size(); ++k) {
+        EXPECT_GT(limbs.source[k][1], 0.4) << k; // on the thigh, above the knee
+        EXPECT_LT(limbs.source[k][1], 0.6) << k;
+        EXPECT_LT((limbs.target[k] - (s.thighTurn * (limbs.source[k] - s.hip) + s.hip)).norm(),
+                  0.015)
+            << k;
+    }
+    // Either way round the same segment, held at the inverse turn.
+    const RigidLimbs<2> back =
+        findRigidLimbs<2>(s.target, s.source, {s.tip2}, {s.tip1}, s.still, o);
+    ASSERT_EQ(back.limbs.size(), 1u);
+    ASSERT_TRUE(back.limbs[0].used) << back.limbs[0].reason;
+    EXPECT_NEAR(back.limbs[0].angle, l.angle, 1e-6);
+}
+
+TEST(RigidLimbs, SegmentsOnlyForATipThatStayedAndALimbThatTurned)
+{
+    const Squat s = squat(20, 40);
+    RigidLimbOptions o;
+    o.minMotion = 0.125;
+    // The tip moved farther than segmentMaxTipMotion: no segment is sought.
+    RigidLimbOptions strict = o;
+    strict.segmentMaxTipMotion = 0.01;
+    EXPECT_TRUE(
+        findRigidLimbs<2>(s.source, s.target, {s.tip1}, {s.tip2}, s.still, strict).limbs.empty());
+    // Segments off.
+    RigidLimbOptions off = o;
+    off.segmentTo = 0;
+    EXPECT_TRUE(
+        findRigidLimbs<2>(s.source, s.target, {s.tip1}, {s.tip2}, s.still, off).limbs.empty());
+    // A thigh turned by less than segmentMinAngle is left to the shape terms, and not reported.
+    const Squat small = squat(5, 10);
+    EXPECT_TRUE(
+        findRigidLimbs<2>(small.source, small.target, {small.tip1}, {small.tip2}, small.still, o)
+            .limbs.empty());
+    // A band that is no rigid part (from the shin over the knee into the thigh) is refused.
+    RigidLimbOptions knee = o;
+    knee.segmentFrom = 0.35;
+    knee.segmentTo = 0.65;
+    const RigidLimbs<2> bent =
+        findRigidLimbs<2>(s.source, s.target, {s.tip1}, {s.tip2}, s.still, knee);
+    ASSERT_EQ(bent.limbs.size(), 1u);
+    EXPECT_FALSE(bent.limbs[0].used);
+    EXPECT_TRUE(bent.source.empty());
+    // Options out of range.
+    RigidLimbOptions bad = o;
+    bad.segmentFrom = 0.8;
+    bad.segmentTo = 0.7;
+    EXPECT_THROW(findRigidLimbs<2>(s.source, s.target, {s.tip1}, {s.tip2}, s.still, bad),
+                 openvdb::ValueError);
 }

@@ -155,7 +155,8 @@ autoLandmarkLine(const AutoLandmarkSummary& a, int firstLevel, double tolerance)
                   ")";
     std::string limbs;
     for (const RigidLimbFit& l : a.limbs) {
-        limbs += "; limb " + std::to_string(l.extremity + 1) +
+        limbs += std::string(l.segment ? "; segment of limb " : "; limb ") +
+                 std::to_string(l.extremity + 1) +
                  (l.used ? ": rigid, turned " + fixed("%.0f", l.angle) + " deg (fit " +
                                fixed("%.2e", l.residual) + ")"
                          : ": not held: " + l.reason);
@@ -677,6 +678,49 @@ matchOptionTable()
              if (!(x > 0 && x <= 0.8))
                  throw UsageError("--rigid-limb-reach must be in (0, 0.8], got " + v);
              o.rigidLimbOptions.reach = x;
+         }},
+        {"--rigid-segment", "FROM,TO|off", "Landmarks (an addition to the paper)",
+         "when a limb from its tip is not held (bent at a second joint, or its tip barely "
+         "moved), the segment next to its joint, the part of the surface whose geodesic distance "
+         "from the tip is between FROM and TO times the joint's, is fitted rigidly the same way "
+         "and held when it fits and turned by at least --rigid-segment-min-angle, "
+         "0 <= FROM < TO <= 1 (default " +
+             (d.rigidLimbOptions.segmentTo > 0
+                  ? formatNumber(d.rigidLimbOptions.segmentFrom) + "," +
+                        formatNumber(d.rigidLimbOptions.segmentTo)
+                  : std::string("off")) +
+             "; docs/numerics.md \"Rigid segments\")",
+         [](O& o, const std::string& v) {
+             if (v == "off") {
+                 o.rigidLimbOptions.segmentTo = 0;
+                 return;
+             }
+             const std::size_t comma = v.find(',');
+             if (comma == std::string::npos)
+                 throw UsageError("--rigid-segment takes FROM,TO or off, got " + v);
+             const double from = parseDouble("--rigid-segment", v.substr(0, comma)),
+                          to = parseDouble("--rigid-segment", v.substr(comma + 1));
+             if (!(from >= 0 && from < to && to <= 1))
+                 throw UsageError("--rigid-segment needs 0 <= FROM < TO <= 1, got " + v);
+             o.rigidLimbOptions.segmentFrom = from;
+             o.rigidLimbOptions.segmentTo = to;
+         }},
+        {"--rigid-segment-min-angle", "X", "Landmarks (an addition to the paper)",
+         "a rigid segment is held when turned by at least X degrees, >= 0 (default " +
+             formatNumber(d.rigidLimbOptions.segmentMinAngle) + ")",
+         [](O& o, const std::string& v) {
+             const double x = parseDouble("--rigid-segment-min-angle", v);
+             if (!(x >= 0)) throw UsageError("--rigid-segment-min-angle must be >= 0, got " + v);
+             o.rigidLimbOptions.segmentMinAngle = x;
+         }},
+        {"--rigid-segment-tip-motion", "X", "Landmarks (an addition to the paper)",
+         "a rigid segment is sought only for an extremity that moved by at most X (unit box), "
+         ">= 0 (default " +
+             formatNumber(d.rigidLimbOptions.segmentMaxTipMotion) + ": the tip stayed)",
+         [](O& o, const std::string& v) {
+             const double x = parseDouble("--rigid-segment-tip-motion", v);
+             if (!(x >= 0)) throw UsageError("--rigid-segment-tip-motion must be >= 0, got " + v);
+             o.rigidLimbOptions.segmentMaxTipMotion = x;
          }},
         {"--inner-distance-weight", "X", "Landmarks (an addition to the paper)",
          "c_F of the inner-distance term, >= 0: when the automatic anchors act (an "
@@ -1221,6 +1265,12 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
              {"rigidLimbAnchorRadius", opts.rigidLimbAnchorRadius},
              {"rigidLimbCount", opts.rigidLimbOptions.count},
              {"rigidLimbReach", opts.rigidLimbOptions.reach},
+             {"rigidSegment", opts.rigidLimbOptions.segmentTo > 0
+                                  ? formatNumber(opts.rigidLimbOptions.segmentFrom) + "," +
+                                        formatNumber(opts.rigidLimbOptions.segmentTo)
+                                  : std::string("off")},
+             {"rigidSegmentMinAngle", opts.rigidLimbOptions.segmentMinAngle},
+             {"rigidSegmentTipMotion", opts.rigidLimbOptions.segmentMaxTipMotion},
              {"innerDistanceWeight", opts.innerDistanceWeight},
              {"innerDistanceTolerance", opts.innerDistanceTolerance},
              {"innerDistanceRatio", opts.innerDistanceRatio},
@@ -1258,6 +1308,7 @@ reportJson(const MatchCliOptions& o, const MatchOptions& opts, const Shape (&in)
             Json limbs = Json::array();
             for (const RigidLimbFit& l : a.limbs) {
                 limbs.push_back(Json{{"extremity", l.extremity},
+                                     {"segment", l.segment},
                                      {"used", l.used},
                                      {"reason", l.used ? Json() : Json(l.reason)},
                                      {"joint", l.joint()},

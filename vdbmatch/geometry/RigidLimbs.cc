@@ -27,6 +27,9 @@ constexpr int CHORD_RINGS = 3;
 /// Fits from different starts this close to the closest (relative to it, or to the tolerance
 /// if larger) count as equally close.
 constexpr double START_TIE = 0.1;
+/// A rigid segment turns about its joint: the fit may move the joint vertex of each shape by at
+/// most this times J (step 6).
+constexpr double SEGMENT_JOINT_SLACK = 0.1;
 
 /// Each vertex's share of the surface's measure: 1/D of each element's length or area.
 template <int D>
@@ -277,16 +280,22 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
     checkPoints(sourceTips, "the source tips");
     checkPoints(targetTips, "the target tips");
     checkPoints(still, "the still points");
-    const bool ok = opts.minMotion >= 0 && std::isfinite(opts.minMotion) && opts.reach > 0 &&
-                    opts.reach <= 1 && opts.targetReach >= opts.reach && opts.targetReach <= 1 &&
-                    opts.trim > 0 && opts.trim <= 1 && opts.iterations >= 1 && opts.starts >= 1 &&
-                    opts.maxResidual >= 0 && std::isfinite(opts.maxResidual) && opts.count >= 2;
+    const bool ok =
+        opts.minMotion >= 0 && std::isfinite(opts.minMotion) && opts.reach > 0 && opts.reach <= 1 &&
+        opts.targetReach >= opts.reach && opts.targetReach <= 1 && opts.trim > 0 &&
+        opts.trim <= 1 && opts.iterations >= 1 && opts.starts >= 1 && opts.maxResidual >= 0 &&
+        std::isfinite(opts.maxResidual) && opts.count >= 2 &&
+        (opts.segmentTo == 0 ||
+         (opts.segmentFrom >= 0 && opts.segmentFrom < opts.segmentTo && opts.segmentTo <= 1)) &&
+        opts.segmentMinAngle >= 0 && std::isfinite(opts.segmentMinAngle) &&
+        opts.segmentMaxTipMotion >= 0 && std::isfinite(opts.segmentMaxTipMotion);
     if (!ok) {
         OPENVDB_THROW(
             openvdb::ValueError,
             "findRigidLimbs: options out of range (minMotion >= 0, 0 < reach <= "
             "targetReach <= 1, 0 < trim <= 1, iterations >= 1, starts >= 1, maxResidual >= 0, "
-            "count >= 2)");
+            "count >= 2, segmentTo = 0 or 0 <= segmentFrom < segmentTo <= 1, segmentMinAngle >= 0, "
+            "segmentMaxTipMotion >= 0)");
     }
     RigidLimbs<D> out;
     if (still.empty()) return out;
@@ -296,57 +305,24 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         still1.push_back(nearestVertex(unitSource, p));
         still2.push_back(nearestVertex(unitTarget, p));
     }
-    std::vector<std::vector<std::pair<std::size_t, double>>> graph1, graph2; // when needed
-    for (std::size_t k = 0; k < sourceTips.size(); ++k) {
-        if (!((sourceTips[k] - targetTips[k]).norm() > opts.minMotion)) continue;
-        if (graph1.empty()) {
-            detail::invokeBoth(
-                opts.threaded, [&] { graph1 = chordGraph(unitSource); },
-                [&] { graph2 = chordGraph(unitTarget); });
-        }
-        RigidLimb<D> limb;
-        limb.extremity = k;
-        std::vector<double> g1, g2;
-        detail::invokeBoth(
-            opts.threaded,
-            [&] { g1 = geodesicDistance(graph1, nearestVertex(unitSource, sourceTips[k])); },
-            [&] { g2 = geodesicDistance(graph2, nearestVertex(unitTarget, targetTips[k])); });
-        double j1 = FAR, j2 = FAR;
-        for (std::size_t i : still1)
-            j1 = std::min(j1, g1[i]);
-        for (std::size_t i : still2)
-            j2 = std::min(j2, g2[i]);
-        limb.sourceJoint = j1;
-        limb.targetJoint = j2;
-        if (!std::isfinite(limb.joint())) {
-            limb.reason = "no still point is connected to the tip";
-            out.limbs.push_back(limb);
-            continue;
-        }
-
-        const double reach = opts.reach * limb.joint(),
-                     targetReach = opts.targetReach * limb.joint();
-        std::vector<std::size_t> r1, r2, fit1, fit2;
-        for (std::size_t i = 0; i < g1.size(); ++i) {
-            if (g1[i] < reach) r1.push_back(i);
-            if (g1[i] < targetReach) fit1.push_back(i);
-        }
-        for (std::size_t i = 0; i < g2.size(); ++i) {
-            if (g2[i] < reach) r2.push_back(i);
-            if (g2[i] < targetReach) fit2.push_back(i);
-        }
+    // Steps 3 to 5 for one part of a limb: r1, r2 its vertices on each shape, fit1, fit2 the
+    // closest points its fit may pair them with, tip1, tip2 where its samples start; held only
+    // when it fits and turned by at least minAngle degrees.
+    auto fitPart = [&](RigidLimb<D>& limb, const std::vector<std::size_t>& r1,
+                       const std::vector<std::size_t>& r2, const std::vector<std::size_t>& fit1,
+                       const std::vector<std::size_t>& fit2, const Vec<D>& tip1, const Vec<D>& tip2,
+                       double minAngle, const Vec<D>* joint1, const Vec<D>* joint2) {
         limb.sourceVertices = r1.size();
         limb.targetVertices = r2.size();
         if (r1.size() < opts.minVertices || r2.size() < opts.minVertices) {
             std::ostringstream s;
             s << "the limb has too few vertices (" << r1.size() << " and " << r2.size() << ")";
             limb.reason = s.str();
-            out.limbs.push_back(limb);
-            continue;
+            return;
         }
         Vec<D> c1, u1, c2, u2;
-        principalAxis(unitSource, w1, r1, sourceTips[k], c1, u1);
-        principalAxis(unitTarget, w2, r2, targetTips[k], c2, u2);
+        principalAxis(unitSource, w1, r1, tip1, c1, u1);
+        principalAxis(unitTarget, w2, r2, tip2, c2, u2);
         // Trimmed closest points, both ways at once: the pairs are M1's limb with its closest
         // points on M2 and M2's limb with its closest points on M1, so that the fit of M2 onto
         // M1 is the inverse motion. From each of `starts` rotations (the least rotation between
@@ -459,24 +435,156 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             s << "not rigid: the fit leaves " << residual << " > " << opts.maxResidual
               << " (unit box)";
             limb.reason = s.str();
-            out.limbs.push_back(limb);
-            continue;
+            return;
+        }
+        if (!(limb.angle >= minAngle)) {
+            std::ostringstream s;
+            s << "turned by " << limb.angle << " < " << minAngle << " degrees";
+            limb.reason = s.str();
+            return;
+        }
+        if (joint1) {
+            // A segment turns about its joint, which stays: where the map takes each shape's
+            // joint vertex is near it, or the fit found another motion (a band of a limb fits
+            // itself half a turn round).
+            const double slip = std::max((limb.map(*joint1) - *joint1).norm(),
+                                         (limb.inverse(*joint2) - *joint2).norm());
+            if (!(slip <= SEGMENT_JOINT_SLACK * limb.joint())) {
+                std::ostringstream s;
+                s << "the joint does not stay: the fit moves it by " << slip << " > "
+                  << SEGMENT_JOINT_SLACK << " J = " << SEGMENT_JOINT_SLACK * limb.joint()
+                  << " (unit box)";
+                limb.reason = s.str();
+                return;
+            }
         }
         limb.used = true;
-        const std::size_t half = opts.count / 2;
-        for (std::size_t i : farthestSamples(unitSource, r1, sourceTips[k], opts.count - half)) {
+        const std::size_t targetCount = opts.count / 2;
+        for (std::size_t i : farthestSamples(unitSource, r1, tip1, opts.count - targetCount)) {
             const Vec<D> q = limb.map(unitSource.points[i]);
             if (!((q.array() > 0).all() && (q.array() < 1).all())) continue; // off Omega
             out.source.push_back(unitSource.points[i]);
             out.target.push_back(q);
         }
-        for (std::size_t i : farthestSamples(unitTarget, r2, targetTips[k], half)) {
+        for (std::size_t i : farthestSamples(unitTarget, r2, tip2, targetCount)) {
             const Vec<D> p = limb.inverse(unitTarget.points[i]);
             if (!((p.array() > 0).all() && (p.array() < 1).all())) continue; // off Omega
             out.source.push_back(p);
             out.target.push_back(unitTarget.points[i]);
         }
-        out.limbs.push_back(limb);
+    };
+    std::vector<std::vector<std::pair<std::size_t, double>>> graph1, graph2; // when needed
+    const bool segments = opts.segmentTo > 0;
+    // The geodesic distances from each tip on each shape, when needed.
+    std::vector<std::vector<double>> geodesics1(sourceTips.size()), geodesics2(sourceTips.size());
+    const auto computeGeodesics = [&](std::size_t k) {
+        if (!geodesics1[k].empty()) return;
+        if (graph1.empty()) {
+            detail::invokeBoth(
+                opts.threaded, [&] { graph1 = chordGraph(unitSource); },
+                [&] { graph2 = chordGraph(unitTarget); });
+        }
+        detail::invokeBoth(
+            opts.threaded,
+            [&] {
+                geodesics1[k] = geodesicDistance(graph1, nearestVertex(unitSource, sourceTips[k]));
+            },
+            [&] {
+                geodesics2[k] = geodesicDistance(graph2, nearestVertex(unitTarget, targetTips[k]));
+            });
+    };
+    for (std::size_t k = 0; k < sourceTips.size(); ++k) {
+        const bool moved = (sourceTips[k] - targetTips[k]).norm() > opts.minMotion;
+        if (!moved &&
+            !(segments && (sourceTips[k] - targetTips[k]).norm() <= opts.segmentMaxTipMotion))
+            continue;
+        computeGeodesics(k);
+        const std::vector<double>&g1 = geodesics1[k], &g2 = geodesics2[k];
+        double j1 = FAR, j2 = FAR;
+        for (std::size_t i : still1)
+            j1 = std::min(j1, g1[i]);
+        for (std::size_t i : still2)
+            j2 = std::min(j2, g2[i]);
+        RigidLimb<D> limb;
+        limb.extremity = k;
+        limb.sourceJoint = j1;
+        limb.targetJoint = j2;
+        const double joint = limb.joint();
+        if (!std::isfinite(joint)) {
+            if (moved) {
+                limb.reason = "no still point is connected to the tip";
+                out.limbs.push_back(limb);
+            }
+            continue;
+        }
+        // The vertices of each shape with g < to * J.
+        const auto within = [joint](const std::vector<double>& g, double to) {
+            std::vector<std::size_t> idx;
+            for (std::size_t i = 0; i < g.size(); ++i)
+                if (g[i] < to * joint) idx.push_back(i);
+            return idx;
+        };
+        if (moved) {
+            fitPart(limb, within(g1, opts.reach), within(g2, opts.reach),
+                    within(g1, opts.targetReach), within(g2, opts.targetReach), sourceTips[k],
+                    targetTips[k], 0.0, nullptr, nullptr);
+            out.limbs.push_back(limb);
+            continue;
+        }
+        if (!segments || !((sourceTips[k] - targetTips[k]).norm() <= opts.segmentMaxTipMotion))
+            continue;
+        // Step 6: the segment next to the joint of a limb whose tip stayed.
+        const auto jointVertex = [](const std::vector<double>& g,
+                                    const std::vector<std::size_t>& at) {
+            std::size_t best = at.front();
+            for (std::size_t i : at)
+                if (g[i] < g[best]) best = i;
+            return best;
+        };
+        const Vec<D> p1 = unitSource.points[jointVertex(g1, still1)],
+                     p2 = unitTarget.points[jointVertex(g2, still2)];
+        // The segment on each shape: the vertices between segmentFrom and segmentTo of the way
+        // from the tip to the joint vertex, of those nearer this tip than any other (the inner
+        // side of a thigh meets the other thigh's at the crotch). Not those nearer the tip than
+        // the joint: the tip lies to one side of a foot, and the joint's geodesic distance
+        // follows a scan's noise, so that bound cuts the two shapes' segments unlike.
+        for (std::size_t j = 0; j < sourceTips.size(); ++j)
+            computeGeodesics(j);
+        const auto segmentOf = [&](const Surface<D>& m,
+                                   const std::vector<std::vector<double>>& geodesics,
+                                   const Vec<D>& tip, const Vec<D>& p) {
+            std::vector<std::size_t> idx;
+            const std::vector<double>& g = geodesics[k];
+            const Vec<D> axis = p - tip;
+            const double length2 = axis.squaredNorm();
+            if (!(length2 > 0)) return idx;
+            for (std::size_t i = 0; i < g.size(); ++i) {
+                const double along = (m.points[i] - tip).dot(axis) / length2;
+                if (!(along >= opts.segmentFrom && along < opts.segmentTo)) continue;
+                bool nearest = true;
+                for (std::size_t j = 0; j < geodesics.size() && nearest; ++j)
+                    nearest = j == k || g[i] <= geodesics[j][i];
+                if (nearest) idx.push_back(i);
+            }
+            return idx;
+        };
+        const Vec<D> tip1 = unitSource.points[nearestVertex(unitSource, sourceTips[k])],
+                     tip2 = unitTarget.points[nearestVertex(unitTarget, targetTips[k])];
+        const std::vector<std::size_t> s1 = segmentOf(unitSource, geodesics1, tip1, p1),
+                                       s2 = segmentOf(unitTarget, geodesics2, tip2, p2);
+        // A segment too small to fit (a tip next to the still part: a hand hanging by the
+        // body) is no limb and is not reported.
+        if (s1.size() < opts.minVertices || s2.size() < opts.minVertices) continue;
+        RigidLimb<D> segment;
+        segment.extremity = k;
+        segment.segment = true;
+        segment.sourceJoint = j1;
+        segment.targetJoint = j2;
+        fitPart(segment, s1, s2, s1, s2, tip1, tip2, opts.segmentMinAngle, &p1, &p2);
+        // One that fitted but barely turned is a limb that stayed, and not reported.
+        if (segment.used || !(segment.residual <= opts.maxResidual) ||
+            segment.angle >= opts.segmentMinAngle)
+            out.limbs.push_back(segment);
     }
     return out;
 }
