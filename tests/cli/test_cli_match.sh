@@ -292,6 +292,8 @@ assert paper["landmarkAnchors"] == "off" and default["landmarkAnchors"] == "on",
 # the rigid limbs (an addition): off in the paper's preset, 10^4 in 3D
 assert paper["rigidLimbWeight"] == 0 and default["rigidLimbWeight"] == 1e4, (paper, default)
 assert default["rigidLimbMinMotion"] == 1 and default["rigidLimbCount"] == 20 and default["rigidLimbReach"] == 0.6, default
+# the rigid segments (an addition): the thigh band of a planted foot, read back by --config
+assert default["rigidSegment"] == "0.55,0.8" and default["rigidSegmentMinAngle"] == 10 and default["rigidSegmentTipMotion"] == 0.03, default
 assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
 for i, shape in enumerate(("source", "target")):
     assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],
@@ -546,6 +548,10 @@ PY
     check rigid-limb-min-motion-bad 3 '' 'rigidLimbMinMotion must be finite and >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-min-motion -1 --quiet
     check rigid-limb-count-bad 1 '' '--rigid-limb-count must be >= 2' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-count 1 --quiet
     check rigid-limb-reach-bad 1 '' '--rigid-limb-reach must be in \(0, 0.8\]' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-limb-reach 0.9 --quiet
+    check rigid-segment-bad 1 '' '--rigid-segment needs 0 <= FROM < TO <= 1, got 0.8,0.5' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-segment 0.8,0.5 --quiet
+    check rigid-segment-form-bad 1 '' '--rigid-segment takes FROM,TO or off, got 0.5' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-segment 0.5 --quiet
+    check rigid-segment-min-angle-bad 1 '' '--rigid-segment-min-angle must be >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-segment-min-angle -1 --quiet
+    check rigid-segment-tip-motion-bad 1 '' '--rigid-segment-tip-motion must be >= 0' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/o" --rigid-segment-tip-motion -1 --quiet
     check match-2d-auto-landmarks-reverse 0 'automatic landmarks: 5 extremities paired' '' -- "$FIGURE_B" "$FIGURE_A" -o "$SCRATCH/m2ar" --levels 4..6
     check match-2d-auto-landmarks-config 0 'automatic landmarks: 5' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2ac" --config "$SCRATCH/m2a/report.json"
     check match-2d-anchor-count 0 'with [1-7] still anchors at every level' '' -- "$FIGURE_A" "$FIGURE_B" -o "$SCRATCH/m2c7" --levels 4..4 --anchor-count 7

@@ -413,7 +413,9 @@ TEST(RigidLimbs, SquatHoldsTheThighOfAPlantedFoot)
     // degrees about the hip, and its points go where the thigh's turn takes them, up to a
     // slide along the thigh: a straight bar fits itself slid along its axis, and where the
     // band ends on each shape decides the slide (the squat shortens the line from the foot to
-    // the hip by 6%, so the bands end 0.01 apart; 2.5 vertex spacings here).
+    // the hip by 6%, so the bands end 0.01 apart; 2.5 vertex spacings here), and the angle up
+    // to the bands' cut: across the line from the tip to the joint on each shape, which the
+    // thigh turned against on M2, so that M2's band ends obliquely (1.6 degrees here).
     const Squat s = squat(20, 40);
     ASSERT_LT((s.tip2 - s.tip1).norm(), RigidLimbOptions().segmentMaxTipMotion);
     RigidLimbOptions o;
@@ -424,7 +426,7 @@ TEST(RigidLimbs, SquatHoldsTheThighOfAPlantedFoot)
     const RigidLimb<2>& l = limbs.limbs[0];
     EXPECT_TRUE(l.segment);
     ASSERT_TRUE(l.used) << l.reason;
-    EXPECT_NEAR(l.angle, 20.0, 1.5);
+    EXPECT_NEAR(l.angle, 20.0, 2.5);
     EXPECT_LT(l.residual, 3e-3);
     ASSERT_EQ(limbs.source.size(), o.count);
     for (std::size_t k = 0; k < limbs.source.size(); ++k) {

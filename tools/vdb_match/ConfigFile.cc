@@ -192,6 +192,11 @@ parseConfig(const std::string& text, const std::string& path)
         !params.contains("rigidLimbWeight")) {
         settings.push_back({"rigidLimbWeight", "--rigid-limb-weight", "0"});
     }
+    // ... and one before the rigid segments (no rigidSegment) had none.
+    if (doc.contains("parameters") && params.contains("rigidLimbWeight") &&
+        !params.contains("rigidSegment")) {
+        settings.push_back({"rigidSegment", "--rigid-segment", "off"});
+    }
     // ... and one from before innerDistanceRatio kept every vertex of M1 in it.
     if (doc.contains("parameters") && params.contains("innerDistanceWeight") &&
         !params.contains("innerDistanceRatio")) {

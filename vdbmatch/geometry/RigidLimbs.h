@@ -89,7 +89,7 @@ struct RigidLimbOptions
 
     /// The segment next to the joint (step 6): from <= along < to of the way from the tip to
     /// the joint, 0 <= from < to <= 1; to = 0: not sought.
-    double segmentFrom = 0.55, segmentTo = 0.7;
+    double segmentFrom = 0.55, segmentTo = 0.8;
     double segmentMinAngle = 10; ///< a segment is held when turned by at least this, degrees
     /// A segment is sought only for a tip that moved by at most this (Omega units; the anchors'
     /// radius: the tip stayed as the anchors see it), >= 0.
