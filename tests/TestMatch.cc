@@ -884,6 +884,8 @@ TEST(Match, RigidLimbsRefuseANonRigidArm)
     EXPECT_EQ(MatchOptions::defaults(2).rigidLimbWeight, DEFAULT_RIGID_LIMB_WEIGHT);
     EXPECT_EQ(MatchOptions::defaults(2).rigidLimbAnchorRadius, 0.0);
     EXPECT_EQ(MatchOptions::paper(3).rigidLimbWeight, 0.0);
+    EXPECT_GT(MatchOptions::defaults(2).rigidLimbOptions.segmentTo, 0.0); // rigid segments: 2D only
+    EXPECT_EQ(MatchOptions::defaults(3).rigidLimbOptions.segmentTo, 0.0);
     EXPECT_EQ(MatchOptions::paper(3).rigidLimbAnchorRadius, 0.0);
     const auto [rest, oneArm] = starPose();
     const Surface<2> a = starOutline(rest, 24);

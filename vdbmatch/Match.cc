@@ -130,6 +130,9 @@ MatchOptions::paper(int dim)
     opts.multiscale.descent.gradientTolerance = DEFAULT_MATCH_GRADIENT_FLOOR;
     opts.anchorWeight = dim == 2 ? DEFAULT_ANCHOR_WEIGHT_2D : DEFAULT_ANCHOR_WEIGHT_3D;
     opts.anchorOptions.count = dim == 2 ? DEFAULT_ANCHOR_COUNT_2D : DEFAULT_ANCHOR_COUNT_3D;
+    // Rigid segments (with the rigid limbs, off here) in 2D only: the 3D whole-body bend held
+    // one and lost 26% (docs/numerics.md "Rigid segments").
+    if (dim == 3) opts.rigidLimbOptions.segmentTo = 0;
     return opts;
 }
 

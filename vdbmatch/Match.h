@@ -320,8 +320,10 @@ struct MatchOptions
     /// to the joint lies off the source by more than the fixed tolerance). >= 0; 0: the anchors
     /// keep their radius (paper(), defaults(2)); defaults(3): DEFAULT_RIGID_LIMB_ANCHOR_RADIUS_3D.
     double rigidLimbAnchorRadius = 0;
-    RigidLimbOptions rigidLimbOptions; ///< reach, fit and count (Omega units; minMotion is set
-                                       ///< from rigidLimbMinMotion)
+    /// Reach, fit, count and rigid segments (Omega units; minMotion is set from
+    /// rigidLimbMinMotion). The segments (RigidLimbOptions::segmentTo > 0, docs/numerics.md
+    /// "Rigid segments") are on in 2D and off in 3D (paper(3), defaults(3)).
+    RigidLimbOptions rigidLimbOptions;
     /// Inner-distance term, an addition to the paper (docs/numerics.md "The inner distance"):
     /// when the extremities are paired (the automatic landmarks, or beside given landmarks with
     /// landmarkAnchors) and the anchors act (an articulation: a stretch or a twist

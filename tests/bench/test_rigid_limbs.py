@@ -11,7 +11,11 @@ the shoulder), levels 4..6 (a few seconds each):
   degrees (from the fit's twelve starts: from the principal axes alone it ended at 116 and was
   left out), the anchors keep their radius, the arms' vertices (those g moves by more than 0.3
   of its largest motion) come within a tenth of their error without the limbs, and the error
-  over all vertices falls by half."""
+  over all vertices falls by half;
+- rigid segments (docs/numerics.md "Rigid segments", 2D, since 2026-12-02's twenty-fifth
+  session): on the squat (figure_knees_bent, levels 4..7), whose feet stay, both thighs are
+  held as segments with about g's 22 degrees, the thighs' error falls below half of that with
+  --rigid-segment off, and the error over all vertices by more than a third."""
 
 import json
 
@@ -24,6 +28,7 @@ from limb_twist import twist_table  # noqa: E402  (bench/accuracy/limb_twist.py)
 
 PAIR = "animal_leg_swing"
 ARMS = "figure_arms_horizontal"
+SQUAT = "figure_knees_bent"
 LIMBS = {"on": [], "off": ["--rigid-limb-weight", "0"]}
 
 
@@ -35,6 +40,12 @@ def runs(tmp_path_factory):
 @pytest.fixture(scope="module")
 def arms(tmp_path_factory):
     return generate_and_match(tmp_path_factory.mktemp("arms"), ARMS, LIMBS, "4..7", threads=2)
+
+
+@pytest.fixture(scope="module")
+def squat(tmp_path_factory):
+    return generate_and_match(tmp_path_factory.mktemp("squat"), SQUAT,
+                              {"on": [], "off": ["--rigid-segment", "off"]}, "4..7", threads=2)
 
 
 def measured(pair, run):
@@ -91,3 +102,26 @@ def test_the_raised_arms_are_carried_whole_in_2d(arms):
     assert err["on"][arm].mean() < 0.1 * err["off"][arm].mean(), (err["on"][arm].mean(),
                                                                   err["off"][arm].mean())
     assert err["on"].mean() < 0.5 * err["off"].mean(), (err["on"].mean(), err["off"].mean())
+
+
+def test_the_squats_thighs_are_held_as_segments_in_2d(squat):
+    pair, run = squat
+    on = json.load(open(run["on"] / "report.json"))
+    off = json.load(open(run["off"] / "report.json"))
+    limbs = on["autoLandmarks"]["rigidLimbs"]
+    used = [l for l in limbs if l["used"]]
+    assert len(used) == 2 and all(l["segment"] for l in used), limbs
+    for limb in used:
+        assert 17 < limb["angleDegrees"] < 28 and limb["residual"] < 0.003, limb
+    assert on["autoLandmarks"]["rigidLimbPoints"] == 40
+    assert on["parameters"]["rigidSegment"] == "0.55,0.8"
+    assert "rigidLimbs" not in off["autoLandmarks"], off["autoLandmarks"].keys()
+    v, g = (read_points(str(p), 2) for p in (pair / "source.polyline", pair / "truth.xyz"))
+    thighs = (np.abs(v[:, 0]) < 0.25) & (v[:, 1] > -0.45) & (v[:, 1] < -0.15)
+    err = {}
+    for label in ("on", "off"):
+        phi = read_points(str(run[label] / "deformed.obj"), 2)
+        err[label] = np.linalg.norm(phi - g, axis=1)
+    assert err["on"][thighs].mean() < 0.5 * err["off"][thighs].mean(), (
+        err["on"][thighs].mean(), err["off"][thighs].mean())
+    assert err["on"].mean() < 0.67 * err["off"].mean(), (err["on"].mean(), err["off"].mean())

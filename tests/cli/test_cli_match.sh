@@ -292,8 +292,8 @@ assert paper["landmarkAnchors"] == "off" and default["landmarkAnchors"] == "on",
 # the rigid limbs (an addition): off in the paper's preset, 10^4 in 3D
 assert paper["rigidLimbWeight"] == 0 and default["rigidLimbWeight"] == 1e4, (paper, default)
 assert default["rigidLimbMinMotion"] == 1 and default["rigidLimbCount"] == 20 and default["rigidLimbReach"] == 0.6, default
-# the rigid segments (an addition): the thigh band of a planted foot, read back by --config
-assert default["rigidSegment"] == "0.55,0.8" and default["rigidSegmentMinAngle"] == 10 and default["rigidSegmentTipMotion"] == 0.03, default
+# the rigid segments (an addition): off in 3D (these are 3D runs), read back by --config
+assert default["rigidSegment"] == "off" and default["rigidSegmentMinAngle"] == 10 and default["rigidSegmentTipMotion"] == 0.03, default
 assert all(0 < v < 1e-3 for v in noise["lattice"]), noise
 for i, shape in enumerate(("source", "target")):
     assert noise["smoothingLength"][i] == max(default["noiseSmoothing"] * noise[shape],

@@ -121,6 +121,7 @@ struct MatchCliOptions
     double rigidLimbMinMotion = MatchOptions().rigidLimbMinMotion; ///< --rigid-limb-min-motion
     std::optional<double> rigidLimbAnchorRadius; ///< --rigid-limb-anchor-radius (per dimension)
     RigidLimbOptions rigidLimbOptions;           ///< --rigid-limb-count, --rigid-limb-reach
+    bool rigidSegmentGiven = false; ///< --rigid-segment given (else the default per dimension)
     double innerDistanceTolerance = DEFAULT_INNER_DISTANCE_TOLERANCE;
     double innerDistanceRatio = DEFAULT_INNER_DISTANCE_RATIO;
     int innerDistanceLevel = 0;     ///< --inner-distance-level (0: per dimension)
@@ -680,17 +681,18 @@ matchOptionTable()
              o.rigidLimbOptions.reach = x;
          }},
         {"--rigid-segment", "FROM,TO|off", "Landmarks (an addition to the paper)",
-         "when a limb from its tip is not held (bent at a second joint, or its tip barely "
-         "moved), the segment next to its joint, the part of the surface whose geodesic distance "
-         "from the tip is between FROM and TO times the joint's, is fitted rigidly the same way "
-         "and held when it fits and turned by at least --rigid-segment-min-angle, "
+         "with the rigid limbs, for an extremity that stayed (--rigid-segment-tip-motion) "
+         "while its limb moved (a foot planted below a bent knee), the segment next to its "
+         "joint: the vertices between FROM and TO of the way from the tip to the joint (the "
+         "nearest anchor), along the straight line between them, of those nearer this tip than "
+         "any other; fitted rigidly as a limb is and held the same way when it fits, turned by "
+         "at least --rigid-segment-min-angle and keeps its joint (the thigh), "
          "0 <= FROM < TO <= 1 (default " +
-             (d.rigidLimbOptions.segmentTo > 0
-                  ? formatNumber(d.rigidLimbOptions.segmentFrom) + "," +
-                        formatNumber(d.rigidLimbOptions.segmentTo)
-                  : std::string("off")) +
-             "; docs/numerics.md \"Rigid segments\")",
+             formatNumber(RigidLimbOptions().segmentFrom) + "," +
+             formatNumber(RigidLimbOptions().segmentTo) +
+             " in 2D, off in 3D; docs/numerics.md \"Rigid segments\")",
          [](O& o, const std::string& v) {
+             o.rigidSegmentGiven = true;
              if (v == "off") {
                  o.rigidLimbOptions.segmentTo = 0;
                  return;
@@ -1526,7 +1528,14 @@ runMatch(const MatchCliOptions& o, const Shape (&in)[2], std::ostream& out, std:
     if (o.anchorWeight) opts.anchorWeight = *o.anchorWeight;
     if (o.innerDistanceWeight) opts.innerDistanceWeight = *o.innerDistanceWeight;
     if (o.rigidLimbWeight) opts.rigidLimbWeight = *o.rigidLimbWeight;
-    opts.rigidLimbOptions = o.rigidLimbOptions;
+    {
+        const RigidLimbOptions byDimension = opts.rigidLimbOptions; // the preset's segments
+        opts.rigidLimbOptions = o.rigidLimbOptions;
+        if (!o.rigidSegmentGiven) {
+            opts.rigidLimbOptions.segmentFrom = byDimension.segmentFrom;
+            opts.rigidLimbOptions.segmentTo = byDimension.segmentTo;
+        }
+    }
     opts.rigidLimbMinMotion = o.rigidLimbMinMotion;
     if (o.rigidLimbAnchorRadius) opts.rigidLimbAnchorRadius = *o.rigidLimbAnchorRadius;
     opts.innerDistanceTolerance = o.innerDistanceTolerance;

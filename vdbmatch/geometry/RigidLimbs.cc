@@ -30,6 +30,8 @@ constexpr double START_TIE = 0.1;
 /// A rigid segment turns about its joint: the fit may move the joint vertex of each shape by at
 /// most this times J (step 6).
 constexpr double SEGMENT_JOINT_SLACK = 0.1;
+/// A rigid segment's vertices are nearer its tip than this times the shape's J (step 6).
+constexpr double SEGMENT_REACH = 1.5;
 
 /// Each vertex's share of the surface's measure: 1/D of each element's length or area.
 template <int D>
@@ -531,8 +533,6 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             out.limbs.push_back(limb);
             continue;
         }
-        if (!segments || !((sourceTips[k] - targetTips[k]).norm() <= opts.segmentMaxTipMotion))
-            continue;
         // Step 6: the segment next to the joint of a limb whose tip stayed.
         const auto jointVertex = [](const std::vector<double>& g,
                                     const std::vector<std::size_t>& at) {
@@ -545,14 +545,15 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
                      p2 = unitTarget.points[jointVertex(g2, still2)];
         // The segment on each shape: the vertices between segmentFrom and segmentTo of the way
         // from the tip to the joint vertex, of those nearer this tip than any other (the inner
-        // side of a thigh meets the other thigh's at the crotch). Not those nearer the tip than
-        // the joint: the tip lies to one side of a foot, and the joint's geodesic distance
-        // follows a scan's noise, so that bound cuts the two shapes' segments unlike.
+        // side of a thigh meets the other thigh's at the crotch) and than SEGMENT_REACH times
+        // the shape's own J (a tip next to the still part has no segment). Not g < J: the tip
+        // lies to one side of a foot, and the joint's geodesic distance follows a scan's
+        // noise, so that bound cuts the two shapes' segments unlike.
         for (std::size_t j = 0; j < sourceTips.size(); ++j)
             computeGeodesics(j);
         const auto segmentOf = [&](const Surface<D>& m,
                                    const std::vector<std::vector<double>>& geodesics,
-                                   const Vec<D>& tip, const Vec<D>& p) {
+                                   double ownJoint, const Vec<D>& tip, const Vec<D>& p) {
             std::vector<std::size_t> idx;
             const std::vector<double>& g = geodesics[k];
             const Vec<D> axis = p - tip;
@@ -560,7 +561,9 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             if (!(length2 > 0)) return idx;
             for (std::size_t i = 0; i < g.size(); ++i) {
                 const double along = (m.points[i] - tip).dot(axis) / length2;
-                if (!(along >= opts.segmentFrom && along < opts.segmentTo)) continue;
+                if (!(along >= opts.segmentFrom && along < opts.segmentTo &&
+                      g[i] < SEGMENT_REACH * ownJoint))
+                    continue;
                 bool nearest = true;
                 for (std::size_t j = 0; j < geodesics.size() && nearest; ++j)
                     nearest = j == k || g[i] <= geodesics[j][i];
@@ -570,8 +573,8 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
         };
         const Vec<D> tip1 = unitSource.points[nearestVertex(unitSource, sourceTips[k])],
                      tip2 = unitTarget.points[nearestVertex(unitTarget, targetTips[k])];
-        const std::vector<std::size_t> s1 = segmentOf(unitSource, geodesics1, tip1, p1),
-                                       s2 = segmentOf(unitTarget, geodesics2, tip2, p2);
+        const std::vector<std::size_t> s1 = segmentOf(unitSource, geodesics1, j1, tip1, p1),
+                                       s2 = segmentOf(unitTarget, geodesics2, j2, tip2, p2);
         // A segment too small to fit (a tip next to the still part: a hand hanging by the
         // body) is no limb and is not reported.
         if (s1.size() < opts.minVertices || s2.size() < opts.minVertices) continue;

@@ -46,18 +46,19 @@
 ///    independent matches are held to inverse maps; a sample whose partner is off Omega is
 ///    left out.
 /// 6. when a tip stayed (moved by at most segmentMaxTipMotion) but its limb did not (a foot
-///    that a squat leaves in place below a bent knee), the segment next to the joint: the vertices
-///    of the limb (g < J) between segmentFrom and segmentTo of the way from the tip to the joint
-///    vertex (the still vertex of least g), measured along the straight line between them, on each
-///    shape (a thigh between the knee and the hip). It is fitted as in step 3 with its own
-///    vertices as the closest points and held as in steps 4 and 5 (its samples start nearest
-///    the tip) when it fits, turned by at least segmentMinAngle degrees (one that barely
-///    turned is left to the shape terms and the anchors), and keeps the joint: the map moves
-///    the joint vertex of each shape by at most 0.1 J (else the fit found another motion: a
-///    band of a limb also fits itself half a turn round). A segment of fewer than minVertices
-///    vertices on either shape (a tip next to the still part), or one that turned by less
-///    than segmentMinAngle (a limb that stayed), is not reported. On the
-///    benchmark's squat (thighs out 22 degrees, shins back in 40) it is the thigh.
+///    that a squat leaves in place below a bent knee), the segment next to the joint: on each
+///    shape, the vertices between segmentFrom and segmentTo of the way from the tip to the
+///    joint vertex (the still vertex of least g), measured along the straight line between
+///    them, of those nearer this tip than any other (geodesically) and than 1.5 times the
+///    shape's own J (a thigh between the knee and the hip). It is fitted as in step 3 with its
+///    own vertices as the closest points and held as in steps 4 and 5 (its samples start
+///    nearest the tip) when it fits, turned by at least segmentMinAngle degrees (one that
+///    barely turned is left to the shape terms and the anchors), and keeps the joint: the map
+///    moves the joint vertex of each shape by at most 0.1 J (else the fit found another
+///    motion: a band of a limb also fits itself half a turn round). A segment of fewer than
+///    minVertices vertices on either shape (a tip next to the still part), or one that turned
+///    by less than segmentMinAngle (a limb that stayed), is not reported. On the benchmark's
+///    squat (thighs out 22 degrees, shins back in 40) it is the thigh.
 /// Limits: a limb stretched or shortened along itself still fits (a cylinder slides along
 /// itself), and its points are then held where the rigid motion takes them; a limb bent at a
 /// second joint (a knee) does not fit and is left out, as a whole; a flat limb turned about its
