@@ -427,7 +427,7 @@ TEST(RigidLimbs, SquatHoldsTheThighOfAPlantedFoot)
     EXPECT_TRUE(l.segment);
     ASSERT_TRUE(l.used) << l.reason;
     EXPECT_NEAR(l.angle, 20.0, 2.5);
-    EXPECT_LT(l.residual, 3e-3);
+    EXPECT_LT(l.residual, 2e-3); // 0.0014: inside the 0.003 that being held already implies
     ASSERT_EQ(limbs.source.size(), o.count);
     for (std::size_t k = 0; k < limbs.source.size(); ++k) {
         EXPECT_GT(limbs.source[k][1], 0.4) << k; // on the thigh, above the knee

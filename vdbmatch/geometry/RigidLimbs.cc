@@ -496,10 +496,9 @@ findRigidLimbs(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             });
     };
     for (std::size_t k = 0; k < sourceTips.size(); ++k) {
-        const bool moved = (sourceTips[k] - targetTips[k]).norm() > opts.minMotion;
-        if (!moved &&
-            !(segments && (sourceTips[k] - targetTips[k]).norm() <= opts.segmentMaxTipMotion))
-            continue;
+        const double motion = (sourceTips[k] - targetTips[k]).norm();
+        const bool moved = motion > opts.minMotion;
+        if (!moved && !(segments && motion <= opts.segmentMaxTipMotion)) continue;
         computeGeodesics(k);
         const std::vector<double>&g1 = geodesics1[k], &g2 = geodesics2[k];
         double j1 = FAR, j2 = FAR;
