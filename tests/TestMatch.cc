@@ -869,6 +869,40 @@ TEST(Match, AnchorsOnlyForAnArticulation)
     }
 }
 
+TEST(Match, AnchorsNotForAGradedTurn)
+{
+    // A turn whose arms turn by different angles (the shortest by 5 degrees, the others by 9)
+    // moves the least-moving extremity by 0.34 of the most: under the test of before 2026-12-02
+    // (at most half as far) an articulation, though nothing stayed. As the torso twist's tail
+    // near the twist's axis, it is not one now (ANCHOR_STILL_RATIO 0.25), and the reason says
+    // so.
+    const auto [rest, oneArm] = starPose();
+    std::vector<double> graded = rest;
+    for (std::size_t k = 0; k < graded.size(); ++k)
+        graded[k] += (k == 1 ? 5 : 9) * M_PI / 180; // arm 1 is the shortest
+    MatchOptions opts = MatchOptions::defaults(2);
+    opts.multiscale.minLevel = 4;
+    opts.multiscale.maxLevel = 4;
+    opts.multiscale.descent.maxIterations = 0; // the landmarks' decisions only
+    const Surface<2> a = starOutline(rest, 24), b = starOutline(graded, 24);
+    const UnitBoxPlacement placement = placeInUnitBox(a, b, opts.margin);
+    const MatchResult<2> r = match<2>(a, b, placement, opts);
+    const AutoLandmarkSummary& s = r.autoLandmarks;
+    ASSERT_TRUE(s.used) << s.reason;
+    ASSERT_EQ(s.source.size(), 5u);
+    double least = std::numeric_limits<double>::infinity(), most = 0;
+    for (std::size_t k = 0; k < s.source.size(); ++k) {
+        const double m = placement.toUnitLength((s.source[k] - s.target[k]).length());
+        least = std::min(least, m);
+        most = std::max(most, m);
+    }
+    ASSERT_LE(least, opts.anchorOptions.radius); // the radius does not decide
+    EXPECT_GT(least, ANCHOR_STILL_RATIO * most);
+    EXPECT_LE(least, 0.5 * most) << "not the case the old ratio got wrong";
+    EXPECT_TRUE(s.anchors.empty());
+    EXPECT_NE(s.anchorReason.find("move alike"), std::string::npos) << s.anchorReason;
+}
+
 TEST(Match, RigidLimbsRefuseANonRigidArm)
 {
     // The rigid limbs (geometry/RigidLimbs.h) act with the anchors: on by default (the nearer

@@ -507,13 +507,13 @@ autoLandmarks(const Surface<D>& unitSource, const Surface<D>& unitTarget,
             RigidLimbOptions lo = opts.rigidLimbOptions;
             lo.threaded = opts.threaded;
             // When some extremity moved beyond K sigma of the first level, every extremity that
-            // moves (farther than ANCHOR_STILL_RATIO of the largest motion, the anchors' own
-            // test of what stays) is a limb too, so that two limbs swung alike are held alike
-            // though one of them moved a little less than K sigma.
+            // moves (farther than RIGID_LIMB_MOTION_RATIO of the largest motion) is a limb too,
+            // so that two limbs swung alike are held alike though one of them moved a little
+            // less than K sigma.
             lo.minMotion = opts.rigidLimbMinMotion * opts.multiscale.energyAt(first).sigmaFactor *
                            std::ldexp(1.0, -first);
             if (largest > lo.minMotion) {
-                lo.minMotion = std::min(lo.minMotion, ANCHOR_STILL_RATIO * largest);
+                lo.minMotion = std::min(lo.minMotion, RIGID_LIMB_MOTION_RATIO * largest);
             }
             out.limbMinMotion = lo.minMotion;
             const RigidLimbs<D> limbs =

@@ -101,8 +101,16 @@ constexpr double DEFAULT_ANCHOR_WEIGHT_3D = 30000;
 /// pair lies within the anchor radius) and moves at most this fraction of the extremity that
 /// moves most. Extremities that all move alike (a twist of the body, a turn of the whole shape)
 /// leave coinciding parts that may have slid along themselves: docs/numerics.md "Automatic
-/// anchors".
-constexpr double ANCHOR_STILL_RATIO = 0.5;
+/// anchors". On the benchmark's articulations the least-moving extremity moves 0-0.16 of the
+/// most (its pair's jitter; five placements), on its twists, swirls and stretches 0.28-0.93.
+/// Until 2026-12-02 the ratio was 0.5, which the torso twist crossed when the placement moved
+/// by 0.5% (its tail, near the twist's axis, moves 0.35-0.86 of the most as its extremity
+/// falls on the lattice), and its error doubled.
+constexpr double ANCHOR_STILL_RATIO = 0.25;
+/// When a rigid limb is sought (MatchOptions::rigidLimbMinMotion), every extremity that moved
+/// farther than this fraction of the largest motion is a limb too, so that two limbs swung alike
+/// are held alike (docs/numerics.md "Rigid limbs").
+constexpr double RIGID_LIMB_MOTION_RATIO = 0.5;
 /// Default c_rl, the total weight of the rigid limbs' points (MatchOptions::rigidLimbWeight), in
 /// 2D and 3D: 20 points of one limb weigh 500 each, five times an anchor (docs/numerics.md
 /// "Rigid limbs"; in 2D since 2026-12-02, when the fit learnt to start from more than the
@@ -309,8 +317,8 @@ struct MatchOptions
     /// Limbs only when some extremity moved farther than this many sigma of the first level
     /// (>= 0): a limb nearer than the first band is found by the match term from the start; one
     /// beyond it is carried far by the coarse levels, which is where a round limb turns. Then
-    /// every extremity that moved farther than that, or than ANCHOR_STILL_RATIO of the largest
-    /// motion, is a limb (two limbs swung alike are held alike).
+    /// every extremity that moved farther than that, or than RIGID_LIMB_MOTION_RATIO of the
+    /// largest motion, is a limb (two limbs swung alike are held alike).
     double rigidLimbMinMotion = 1;
     /// When a rigid limb is held, the anchors are sought again with this patch radius (Omega
     /// units), if smaller than anchorOptions.radius: a limb swung beyond the first band drags

@@ -573,7 +573,7 @@ matchOptionTable()
         {"--auto-anchors", "on|off", "Landmarks (an addition to the paper)",
          "when the automatic landmarks act (or --landmarks are given, with --landmark-anchors "
          "on) and some extremity stays while another moves (at "
-         "least twice as far): hold still, at every level, up to --anchor-count points of M1 "
+         "least four times as far): hold still, at every level, up to --anchor-count points of M1 "
          "and M2 around which the other shape coincides (what the articulation left in place; "
          "the same points either way round; docs/numerics.md) (default " +
              std::string(MatchOptions::defaults(3).autoAnchors ? "on" : "off") +
